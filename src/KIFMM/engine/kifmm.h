@@ -1,0 +1,76 @@
+// Public interface of the KIFMM engine (namespace kifmm, no LAMMPS dependency).
+//
+// Conventions (stated once, here):
+//   Laplace kernel  G(x,y) = 1/|x-y|            (no 4*pi)
+//   Yukawa kernel   G(x,y) = exp(-kappa|x-y|)/|x-y|
+//   potential  phi_i = sum_j G(x_i, y_j) q_j          over sources j with |x_i-y_j| > 0
+//   gradient   g_i   = grad_x phi(x_i)                 (d phi / d x_i, NOT the force)
+// Pairs at zero distance are excluded (never inf/NaN); the caller applies all physical
+// prefactors (coulomb: F_i = -qqrd2e q_i g_i; gravity: F_i = +G m_i g_i).
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <string>
+
+namespace kifmm {
+
+enum class KernelType { Laplace, Yukawa };
+
+struct KernelSpec {
+  KernelType type = KernelType::Laplace;
+  double kappa = 0.0;    // Yukawa screening (1/length); ignored for Laplace
+};
+
+struct Options {
+  int order = 6;           // points per edge of the equivalent/check surface grid (p)
+  int leaf_size = 0;       // max points per leaf (M); 0 = engine default for this order
+  int max_depth = 20;      // hard limit on tree depth (coincident clusters stop here)
+  std::string cache_dir;   // on-disk operator cache; empty = in-memory cache only
+};
+
+// Timings in seconds and sizes of the last evaluate() call.
+struct Stats {
+  int depth = 0;
+  std::size_t n_cells = 0, n_leaves = 0;
+  std::size_t n_sources = 0, n_targets = 0;
+  std::size_t coincident_pairs = 0;   // pairs at r = 0 that were excluded
+  double t_tree = 0, t_lists = 0, t_upward = 0, t_m2l = 0, t_wx = 0, t_downward = 0, t_p2p = 0;
+  double t_precompute = 0;            // operator setup in this call (0 when cached)
+  std::size_t operator_bytes = 0;     // memory of precomputed operators
+  std::size_t tree_bytes = 0;         // memory of tree + expansions in this evaluation
+};
+
+class Evaluator {
+ public:
+  virtual ~Evaluator() = default;
+
+  // Sources (n_src points, xyz interleaved, strengths q) act on targets (n_trg points).
+  // pot (n_trg) may be null: then no potential work is done. grad (3*n_trg) may be null.
+  // Sources with q == 0 are skipped. Sources and targets may be the same arrays.
+  virtual void evaluate(std::size_t n_src, const double *src_xyz, const double *src_q,
+                        std::size_t n_trg, const double *trg_xyz, double *pot,
+                        double *grad) = 0;
+
+  virtual const Stats &stats() const = 0;
+  virtual const KernelSpec &kernel() const = 0;
+  virtual const Options &options() const = 0;
+};
+
+std::unique_ptr<Evaluator> make_evaluator(const KernelSpec &kernel, const Options &options);
+
+// Exact O(N*M) reference with the same conventions (OpenMP, vectorized).
+void direct_sum(const KernelSpec &kernel, std::size_t n_src, const double *src_xyz,
+                const double *src_q, std::size_t n_trg, const double *trg_xyz, double *pot,
+                double *grad);
+
+// Calibration: smallest-cost (order, leaf size) whose measured relative RMS force error
+// is below rel_force_error; also returns the error that was measured for that choice.
+struct Choice {
+  int order;
+  int leaf_size;
+  double measured_error;
+};
+Choice choose_order(const KernelSpec &kernel, double rel_force_error);
+
+}    // namespace kifmm

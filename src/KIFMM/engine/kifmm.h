@@ -27,6 +27,11 @@ struct Options {
   int leaf_size = 0;       // max points per leaf (M); 0 = engine default for this order
   int max_depth = 20;      // hard limit on tree depth (coincident clusters stop here)
   std::string cache_dir;   // on-disk operator cache; empty = in-memory cache only
+  // Fixed root box instead of the bounding cube of the points (e.g. a periodic cell).
+  // Points outside it are clamped into its boundary cells.
+  bool fixed_root = false;
+  double root_center[3] = {0.0, 0.0, 0.0};
+  double root_half_width = 1.0;
 };
 
 // Timings in seconds and sizes of the last evaluate() call.

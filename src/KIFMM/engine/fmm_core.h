@@ -1,0 +1,441 @@
+// Templated FMM core: FmmEvaluator<Kernel> implements kifmm::Evaluator for any kernel type
+// following kernels.h (tests instantiate it with their own kernel). Passes:
+//   tree (octree.h) -> lists (interaction_lists.h) -> operators (operator_cache.h) ->
+//   upward P2M/M2M -> M2L (FFT, m2l_fft.h) -> X (P2L) -> downward L2L -> leaf pass:
+//   P2P over U, W (M2P, or P2P for small leaves), L2P.
+// Every pass is OpenMP-parallel over cells; each cell (or target leaf) writes only its own
+// data and each target accumulates its contributions in a fixed order, so results do not
+// depend on the number of threads.
+#pragma once
+
+#include "interaction_lists.h"
+#include "kernel_scaling.h"
+#include "kifmm.h"
+#include "m2l_fft.h"
+#include "octree.h"
+#include "operator_cache.h"
+#include "operators.h"
+#include "p2p.h"
+#include "surface.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <memory>
+#include <vector>
+
+namespace kifmm {
+
+// Engine default leaf size (max points per leaf) for an order; see calibration.cpp.
+int default_leaf_size(int order);
+
+template <class K> class FmmEvaluator : public Evaluator {
+ public:
+  FmmEvaluator(const K &k, const KernelSpec &spec, const Options &opt) : k_(k), spec_(spec), opt_(opt)
+  {
+    p_ = std::min(std::max(opt_.order, 2), 16);
+    opt_.order = p_;
+    if (opt_.leaf_size <= 0) opt_.leaf_size = default_leaf_size(p_);
+    nsurf_ = surface_size(p_);
+    inner_ = unit_surface(p_, kRadiusInner);
+    outer_ = unit_surface(p_, kRadiusOuter);
+  }
+
+  void evaluate(std::size_t n_src, const double *src_xyz, const double *src_q, std::size_t n_trg,
+                const double *trg_xyz, double *pot, double *grad) override;
+  const Stats &stats() const override { return stats_; }
+  const KernelSpec &kernel() const override { return spec_; }
+  const Options &options() const override { return opt_; }
+
+  // Internals of the last evaluation (tests).
+  const Octree &tree() const { return tree_; }
+  const InteractionLists &lists() const { return lists_; }
+
+ private:
+  K k_;
+  KernelSpec spec_;
+  Options opt_;
+  Stats stats_;
+  int p_ = 6, nsurf_ = 0;
+  SurfacePoints inner_, outer_;
+  Octree tree_;
+  InteractionLists lists_;
+  std::vector<std::shared_ptr<const OperatorSet>> ops_;    // per level
+  std::vector<double> scale_;                              // per level: G(h u) = s G_unit(u)
+  std::unique_ptr<M2LTransform> fft_;
+  // sorted points (structure of arrays)
+  std::vector<double> sx_, sy_, sz_, sq_, tx_, ty_, tz_, tp_, tgx_, tgy_, tgz_;
+  std::vector<double> up_equiv_, dn_check_, dn_equiv_;
+  std::vector<char> has_local_;
+
+  double *up(int c) { return &up_equiv_[(std::size_t) c * nsurf_]; }
+  double *dcheck(int c) { return &dn_check_[(std::size_t) c * nsurf_]; }
+  double *dequiv(int c) { return &dn_equiv_[(std::size_t) c * nsurf_]; }
+  void cell_surface(int c, const SurfacePoints &unit, SurfacePoints &out) const
+  {
+    double ctr[3];
+    tree_.center(tree_.cells[c], ctr);
+    box_surface(unit, ctr, tree_.half_width(tree_.cells[c].level), out);
+  }
+  void setup_operators(double &t_setup);
+  void upward(bool);
+  void m2l();
+  void p2l();
+  void downward();
+  void leaf_pass(bool want_pot, bool want_grad);
+};
+
+template <class K> void FmmEvaluator<K>::setup_operators(double &t_setup)
+{
+  const int nl = tree_.depth + 1;
+  ops_.assign(nl, nullptr);
+  scale_.assign(nl, 1.0);
+  for (int l = 0; l < nl; ++l) {
+    double s;
+    const UnitKernel uk = make_unit_kernel(k_, tree_.half_width(l), s);
+    scale_[l] = s;
+    if (l < 2) continue;    // levels 0,1 carry no expansions (non-periodic)
+    if (level_independent_operators<K>() && l > 0 && ops_[l - 1]) {
+      ops_[l] = ops_[l - 1];
+      continue;
+    }
+    ops_[l] = get_operator_set(uk, p_, opt_.cache_dir, &t_setup);
+  }
+  std::size_t bytes = 0;
+  for (int l = 0; l < nl; ++l)
+    if (ops_[l] && (l == 0 || ops_[l] != ops_[l - 1])) bytes += ops_[l]->bytes();
+  stats_.operator_bytes = bytes;
+  if (!fft_ || fft_->p() != p_) fft_ = std::make_unique<M2LTransform>(p_);
+}
+
+template <class K> void FmmEvaluator<K>::upward(bool)
+{
+  const auto &cells = tree_.cells;
+  for (int l = tree_.depth; l >= 2; --l) {
+    const OperatorSet &op = *ops_[l];
+    const double inv_s = 1.0 / scale_[l];
+#pragma omp parallel
+    {
+      SurfacePoints surf;
+      std::vector<double> check(nsurf_), scratch(nsurf_);
+#pragma omp for schedule(dynamic, 4)
+      for (int c = tree_.level_begin[l]; c < tree_.level_begin[l + 1]; ++c) {
+        const Cell &C = cells[c];
+        if (C.n_src() == 0) continue;
+        double *eq = up(c);
+        if (C.leaf()) {
+          cell_surface(c, outer_, surf);
+          std::fill(check.begin(), check.end(), 0.0);
+          const std::size_t b = C.src_begin;
+          p2p<K, true, false, false>(k_, nsurf_, surf.x.data(), surf.y.data(), surf.z.data(), C.n_src(),
+                                     &sx_[b], &sy_[b], &sz_[b], &sq_[b], check.data(), nullptr, nullptr, nullptr);
+          apply_pinv(op.uc2e_a, op.uc2e_b, nsurf_, op.rank, check.data(), eq, inv_s, scratch.data());
+        } else {
+          std::fill(eq, eq + nsurf_, 0.0);
+          for (int oct = 0; oct < 8; ++oct) {
+            const int ch = C.child[oct];
+            if (ch < 0 || cells[ch].n_src() == 0) continue;
+            matvec(op.m2m[oct].data(), nsurf_, nsurf_, up(ch), eq, 1.0, true);
+          }
+        }
+      }
+    }
+  }
+}
+
+template <class K> void FmmEvaluator<K>::m2l()
+{
+  const auto &cells = tree_.cells;
+  const int nf = fft_->nfreq();
+  std::vector<double> hat;
+  for (int l = 2; l <= tree_.depth; ++l) {
+    const int b0 = tree_.level_begin[l], b1 = tree_.level_begin[l + 1];
+    hat.assign((std::size_t) (b1 - b0) * 2 * nf, 0.0);
+#pragma omp parallel
+    {
+      M2LTransform::Workspace ws(*fft_);
+#pragma omp for schedule(dynamic, 8)
+      for (int c = b0; c < b1; ++c)
+        if (cells[c].n_src() > 0) fft_->forward(up(c), &hat[(std::size_t) (c - b0) * 2 * nf], ws);
+    }
+    const double *kern = ops_[l]->m2l_hat.data();
+    const double s = scale_[l];
+    const int p0 = tree_.level_begin[l - 1], p1 = tree_.level_begin[l];
+#pragma omp parallel
+    {
+      M2LTransform::Workspace ws(*fft_);
+      std::vector<double> ybuf((std::size_t) 8 * 2 * nf);
+      std::vector<const double *> xg(27 * 8);
+      int slots[27];
+#pragma omp for schedule(dynamic, 1)
+      for (int pc = p0; pc < p1; ++pc) {
+        const Cell &P = cells[pc];
+        if (P.leaf() || P.n_trg() == 0) continue;
+        int ng = 0;
+        const auto &col = lists_.colleagues[pc];
+        for (int sl = 0; sl < 27; ++sl) {
+          const int cc = col[sl];
+          if (sl == 13 || cc < 0 || cells[cc].leaf() || cells[cc].n_src() == 0) continue;
+          slots[ng] = sl;
+          for (int oct = 0; oct < 8; ++oct) {
+            const int ch = cells[cc].child[oct];
+            xg[ng * 8 + oct] = (ch >= 0 && cells[ch].n_src() > 0) ? &hat[(std::size_t) (ch - b0) * 2 * nf] : nullptr;
+          }
+          ++ng;
+        }
+        if (ng == 0) continue;
+        double *y[8];
+        for (int oct = 0; oct < 8; ++oct) {
+          const int ch = P.child[oct];
+          y[oct] = (ch >= 0 && cells[ch].n_trg() > 0) ? &ybuf[(std::size_t) oct * 2 * nf] : nullptr;
+          if (y[oct]) std::fill(y[oct], y[oct] + 2 * nf, 0.0);
+        }
+        m2l_hadamard_parent(nf, kern, ng, slots, reinterpret_cast<const double *const(*)[8]>(xg.data()), y);
+        for (int oct = 0; oct < 8; ++oct) {
+          if (!y[oct]) continue;
+          const int ch = P.child[oct];
+          fft_->inverse_add(y[oct], dcheck(ch), s, ws);
+          has_local_[ch] = 1;
+        }
+      }
+    }
+  }
+}
+
+template <class K> void FmmEvaluator<K>::p2l()
+{
+  const auto &cells = tree_.cells;
+  const int n = (int) cells.size();
+#pragma omp parallel
+  {
+    SurfacePoints surf;
+#pragma omp for schedule(dynamic, 4)
+    for (int b = 0; b < n; ++b) {
+      if (lists_.X.size(b) == 0) continue;
+      cell_surface(b, inner_, surf);
+      double *chk = dcheck(b);
+      for (const int *a = lists_.X.begin(b); a != lists_.X.end(b); ++a) {
+        const Cell &A = cells[*a];
+        const std::size_t s0 = A.src_begin;
+        p2p<K, true, false, false>(k_, nsurf_, surf.x.data(), surf.y.data(), surf.z.data(), A.n_src(), &sx_[s0],
+                                   &sy_[s0], &sz_[s0], &sq_[s0], chk, nullptr, nullptr, nullptr);
+      }
+      has_local_[b] = 1;
+    }
+  }
+}
+
+template <class K> void FmmEvaluator<K>::downward()
+{
+  const auto &cells = tree_.cells;
+  for (int l = 2; l <= tree_.depth; ++l) {
+    const OperatorSet &op = *ops_[l];
+    const double inv_s = 1.0 / scale_[l];
+#pragma omp parallel
+    {
+      std::vector<double> scratch(nsurf_);
+#pragma omp for schedule(dynamic, 4)
+      for (int c = tree_.level_begin[l]; c < tree_.level_begin[l + 1]; ++c) {
+        const Cell &C = cells[c];
+        if (C.n_trg() == 0) continue;
+        const int pc = C.parent;
+        if (l > 2 && has_local_[pc]) {
+          int oct = 0;
+          while (cells[pc].child[oct] != c) ++oct;
+          matvec(ops_[l - 1]->l2l[oct].data(), nsurf_, nsurf_, dequiv(pc), dcheck(c), scale_[l - 1], true);
+          has_local_[c] = 1;
+        }
+        if (has_local_[c]) apply_pinv(op.dc2e_a, op.dc2e_b, nsurf_, op.rank, dcheck(c), dequiv(c), inv_s, scratch.data());
+      }
+    }
+  }
+}
+
+template <class K> void FmmEvaluator<K>::leaf_pass(bool want_pot, bool want_grad)
+{
+  (void) want_grad;
+  const auto &cells = tree_.cells;
+  const int nleaf = (int) tree_.leaves.size();
+  std::vector<std::size_t> zeros(nleaf, 0);
+  double t0 = omp_get_wtime();
+  // near field: U list
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int li = 0; li < nleaf; ++li) {
+    const int b = tree_.leaves[li];
+    const Cell &B = cells[b];
+    if (B.n_trg() == 0) continue;
+    const std::size_t t0i = B.trg_begin;
+    for (const int *a = lists_.U.begin(b); a != lists_.U.end(b); ++a) {
+      const Cell &A = cells[*a];
+      const std::size_t s0 = A.src_begin;
+      p2p_pg<K, true>(k_, want_pot, B.n_trg(), &tx_[t0i], &ty_[t0i], &tz_[t0i], A.n_src(), &sx_[s0], &sy_[s0],
+                      &sz_[s0], &sq_[s0], &tp_[t0i], &tgx_[t0i], &tgy_[t0i], &tgz_[t0i], &zeros[li]);
+    }
+  }
+  double t1 = omp_get_wtime();
+  stats_.t_p2p += t1 - t0;
+  // W list: M2P (or P2P when the source leaf has fewer points than a surface)
+#pragma omp parallel
+  {
+    SurfacePoints surf;
+#pragma omp for schedule(dynamic, 1)
+    for (int li = 0; li < nleaf; ++li) {
+      const int b = tree_.leaves[li];
+      const Cell &B = cells[b];
+      if (B.n_trg() == 0 || lists_.W.size(b) == 0) continue;
+      const std::size_t t0i = B.trg_begin;
+      for (const int *a = lists_.W.begin(b); a != lists_.W.end(b); ++a) {
+        const Cell &A = cells[*a];
+        if (A.leaf() && (int) A.n_src() <= nsurf_) {
+          const std::size_t s0 = A.src_begin;
+          p2p_pg<K, false>(k_, want_pot, B.n_trg(), &tx_[t0i], &ty_[t0i], &tz_[t0i], A.n_src(), &sx_[s0], &sy_[s0],
+                           &sz_[s0], &sq_[s0], &tp_[t0i], &tgx_[t0i], &tgy_[t0i], &tgz_[t0i]);
+        } else {
+          cell_surface(*a, inner_, surf);
+          p2p_pg<K, false>(k_, want_pot, B.n_trg(), &tx_[t0i], &ty_[t0i], &tz_[t0i], nsurf_, surf.x.data(),
+                           surf.y.data(), surf.z.data(), up(*a), &tp_[t0i], &tgx_[t0i], &tgy_[t0i], &tgz_[t0i]);
+        }
+      }
+    }
+  }
+  double t2 = omp_get_wtime();
+  stats_.t_wx += t2 - t1;
+  // L2P
+#pragma omp parallel
+  {
+    SurfacePoints surf;
+#pragma omp for schedule(dynamic, 1)
+    for (int li = 0; li < nleaf; ++li) {
+      const int b = tree_.leaves[li];
+      const Cell &B = cells[b];
+      if (B.n_trg() == 0 || !has_local_[b]) continue;
+      const std::size_t t0i = B.trg_begin;
+      cell_surface(b, outer_, surf);
+      p2p_pg<K, false>(k_, want_pot, B.n_trg(), &tx_[t0i], &ty_[t0i], &tz_[t0i], nsurf_, surf.x.data(),
+                       surf.y.data(), surf.z.data(), dequiv(b), &tp_[t0i], &tgx_[t0i], &tgy_[t0i], &tgz_[t0i]);
+    }
+  }
+  stats_.t_downward += omp_get_wtime() - t2;
+  std::size_t z = 0;
+  for (auto v : zeros) z += v;
+  stats_.coincident_pairs = z;
+}
+
+template <class K>
+void FmmEvaluator<K>::evaluate(std::size_t n_src, const double *src_xyz, const double *src_q, std::size_t n_trg,
+                               const double *trg_xyz, double *pot, double *grad)
+{
+  stats_ = Stats{};
+  stats_.n_targets = n_trg;
+  if (n_trg == 0) return;
+  if (pot) std::fill(pot, pot + n_trg, 0.0);
+  if (grad) std::fill(grad, grad + 3 * n_trg, 0.0);
+  if (!pot && !grad) return;
+  double t = omp_get_wtime();
+  // drop zero-strength sources
+  std::vector<double> kxyz, kq;
+  const double *sxyz = src_xyz, *sq = src_q;
+  std::size_t ns = n_src;
+  {
+    std::size_t nz = 0;
+    for (std::size_t j = 0; j < n_src; ++j) nz += src_q[j] == 0.0;
+    if (nz > 0) {
+      kxyz.reserve(3 * (n_src - nz));
+      kq.reserve(n_src - nz);
+      for (std::size_t j = 0; j < n_src; ++j)
+        if (src_q[j] != 0.0) {
+          kxyz.insert(kxyz.end(), src_xyz + 3 * j, src_xyz + 3 * j + 3);
+          kq.push_back(src_q[j]);
+        }
+      sxyz = kxyz.data();
+      sq = kq.data();
+      ns = kq.size();
+    }
+  }
+  stats_.n_sources = ns;
+  if (ns == 0) return;
+  RootBox root;
+  if (opt_.fixed_root) {
+    for (int d = 0; d < 3; ++d) root.center[d] = opt_.root_center[d];
+    root.half_width = opt_.root_half_width;
+  } else {
+    root = bounding_cube(ns, sxyz, n_trg, trg_xyz);
+  }
+  build_octree(tree_, root, ns, sxyz, n_trg, trg_xyz, opt_.leaf_size, opt_.max_depth);
+  // sorted structure-of-arrays copies
+  sx_.resize(ns);
+  sy_.resize(ns);
+  sz_.resize(ns);
+  sq_.resize(ns);
+  tx_.resize(n_trg);
+  ty_.resize(n_trg);
+  tz_.resize(n_trg);
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < ns; ++i) {
+    const std::size_t j = tree_.src_order[i];
+    sx_[i] = sxyz[3 * j];
+    sy_[i] = sxyz[3 * j + 1];
+    sz_[i] = sxyz[3 * j + 2];
+    sq_[i] = sq[j];
+  }
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < n_trg; ++i) {
+    const std::size_t j = tree_.trg_order[i];
+    tx_[i] = trg_xyz[3 * j];
+    ty_[i] = trg_xyz[3 * j + 1];
+    tz_[i] = trg_xyz[3 * j + 2];
+  }
+  double t1 = omp_get_wtime();
+  stats_.t_tree = t1 - t;
+  build_interaction_lists(tree_, lists_);
+  double t2 = omp_get_wtime();
+  stats_.t_lists = t2 - t1;
+  stats_.depth = tree_.depth;
+  stats_.n_cells = tree_.cells.size();
+  stats_.n_leaves = tree_.leaves.size();
+
+  double t_setup = 0;
+  setup_operators(t_setup);
+  stats_.t_precompute = t_setup;
+  double t3 = omp_get_wtime();
+
+  const std::size_t nc = tree_.cells.size();
+  up_equiv_.assign(nc * nsurf_, 0.0);
+  dn_check_.assign(nc * nsurf_, 0.0);
+  dn_equiv_.assign(nc * nsurf_, 0.0);
+  has_local_.assign(nc, 0);
+  tp_.assign(n_trg, 0.0);
+  tgx_.assign(n_trg, 0.0);
+  tgy_.assign(n_trg, 0.0);
+  tgz_.assign(n_trg, 0.0);
+  upward(true);
+  double t4 = omp_get_wtime();
+  stats_.t_upward = t4 - t3;
+  m2l();
+  double t5 = omp_get_wtime();
+  stats_.t_m2l = t5 - t4;
+  p2l();
+  double t6 = omp_get_wtime();
+  stats_.t_wx = t6 - t5;
+  downward();
+  stats_.t_downward = omp_get_wtime() - t6;
+  leaf_pass(pot != nullptr, grad != nullptr);
+
+  // results back in input order
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < n_trg; ++i) {
+    const std::size_t j = tree_.trg_order[i];
+    if (pot) pot[j] = tp_[i];
+    if (grad) {
+      grad[3 * j] = tgx_[i];
+      grad[3 * j + 1] = tgy_[i];
+      grad[3 * j + 2] = tgz_[i];
+    }
+  }
+  // self pairs (same arrays) are not coincident pairs
+  if (src_xyz == trg_xyz && n_src == n_trg && stats_.coincident_pairs >= ns) stats_.coincident_pairs -= ns;
+  stats_.tree_bytes = tree_.bytes() + lists_.bytes() +
+      sizeof(double) * (up_equiv_.size() + dn_check_.size() + dn_equiv_.size() + sx_.size() * 4 + tx_.size() * 7);
+}
+
+}    // namespace kifmm

@@ -1,0 +1,109 @@
+#include "interaction_lists.h"
+
+#include <algorithm>
+
+namespace kifmm {
+
+std::size_t InteractionLists::bytes() const
+{
+  std::size_t b = colleagues.capacity() * sizeof(colleagues[0]);
+  for (const CellList *l : {&U, &V, &W, &X}) b += (l->off.capacity() + l->idx.capacity()) * sizeof(int);
+  return b;
+}
+
+namespace {
+
+void flatten(const std::vector<std::vector<int>> &rows, CellList &out)
+{
+  out.off.assign(rows.size() + 1, 0);
+  for (std::size_t i = 0; i < rows.size(); ++i) out.off[i + 1] = out.off[i] + (int) rows[i].size();
+  out.idx.resize(out.off.back());
+  for (std::size_t i = 0; i < rows.size(); ++i) std::copy(rows[i].begin(), rows[i].end(), out.idx.begin() + out.off[i]);
+}
+
+}    // namespace
+
+void build_interaction_lists(const Octree &tree, InteractionLists &lists)
+{
+  const auto &cells = tree.cells;
+  const int n = (int) cells.size();
+  lists.colleagues.assign(n, {});
+  for (auto &c : lists.colleagues) c.fill(-1);
+  std::vector<std::vector<int>> U(n), V(n), W(n), X(n);
+  std::vector<std::vector<int>> coarse_adj(n);    // leaves with sources, coarser than B, adjacent to B
+  if (n == 0) return;
+  lists.colleagues[0][13] = 0;
+
+  const int nlev = (int) tree.level_begin.size() - 1;
+  for (int l = 1; l < nlev; ++l) {
+#pragma omp parallel for schedule(dynamic, 16)
+    for (int b = tree.level_begin[l]; b < tree.level_begin[l + 1]; ++b) {
+      const Cell &B = cells[b];
+      const int p = B.parent;
+      auto &col = lists.colleagues[b];
+      // colleagues: children of the parent's colleagues that touch B
+      for (int pc : lists.colleagues[p]) {
+        if (pc < 0) continue;
+        const Cell &C = cells[pc];
+        for (int k = 0; k < C.n_children; ++k) {
+          const int d = C.first_child + k;
+          const Cell &D = cells[d];
+          const int dx = D.ix - B.ix, dy = D.iy - B.iy, dz = D.iz - B.iz;
+          if (dx >= -1 && dx <= 1 && dy >= -1 && dy <= 1 && dz >= -1 && dz <= 1)
+            col[(dx + 1) * 9 + (dy + 1) * 3 + (dz + 1)] = d;
+          else if (D.n_src() > 0 && B.n_trg() > 0)
+            V[b].push_back(d);    // child of a parent's colleague, not adjacent
+        }
+      }
+      // leaves coarser than B adjacent to parent(B): split into adjacent (kept) and X
+      auto consider = [&](int a) {
+        if (cells_adjacent(cells[a], B)) coarse_adj[b].push_back(a);
+        else if (B.n_trg() > 0) X[b].push_back(a);
+      };
+      for (int a : coarse_adj[p]) consider(a);
+      for (int s = 0; s < 27; ++s) {
+        const int pc = lists.colleagues[p][s];
+        if (s == 13 || pc < 0) continue;
+        if (cells[pc].leaf() && cells[pc].n_src() > 0) consider(pc);
+      }
+    }
+  }
+  // U and W for target leaves
+#pragma omp parallel for schedule(dynamic, 16)
+  for (int li = 0; li < (int) tree.leaves.size(); ++li) {
+    const int b = tree.leaves[li];
+    const Cell &B = cells[b];
+    if (B.n_trg() == 0) continue;
+    auto &u = U[b];
+    for (int a : coarse_adj[b]) u.push_back(a);
+    // descend the colleagues (B itself included: it is a leaf with possibly sources)
+    std::vector<int> stack;
+    for (int s = 0; s < 27; ++s) {
+      const int c = lists.colleagues[b][s];
+      if (c < 0 || cells[c].n_src() == 0) continue;
+      if (cells[c].leaf()) u.push_back(c);
+      else stack.push_back(c);
+    }
+    while (!stack.empty()) {
+      const int c = stack.back();
+      stack.pop_back();
+      const Cell &C = cells[c];
+      for (int k = 0; k < C.n_children; ++k) {
+        const int d = C.first_child + k;
+        const Cell &D = cells[d];
+        if (D.n_src() == 0) continue;
+        if (!cells_adjacent(D, B)) W[b].push_back(d);
+        else if (D.leaf()) u.push_back(d);
+        else stack.push_back(d);
+      }
+    }
+    std::sort(u.begin(), u.end());
+    std::sort(W[b].begin(), W[b].end());
+  }
+  flatten(U, lists.U);
+  flatten(V, lists.V);
+  flatten(W, lists.W);
+  flatten(X, lists.X);
+}
+
+}    // namespace kifmm

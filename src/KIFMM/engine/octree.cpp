@@ -1,0 +1,202 @@
+#include "octree.h"
+
+#include "morton.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace kifmm {
+
+void Octree::center(const Cell &c, double out[3]) const
+{
+  const double h = half_width(c.level);
+  const int a[3] = {c.ix, c.iy, c.iz};
+  for (int d = 0; d < 3; ++d) out[d] = root.center[d] - root.half_width + (2 * a[d] + 1) * h;
+}
+
+std::size_t Octree::bytes() const
+{
+  return cells.capacity() * sizeof(Cell) + (level_begin.capacity() + leaves.capacity()) * sizeof(int) +
+      (src_order.capacity() + trg_order.capacity()) * sizeof(uint32_t);
+}
+
+RootBox bounding_cube(std::size_t n_src, const double *src_xyz, std::size_t n_trg, const double *trg_xyz)
+{
+  double lo[3], hi[3];
+  for (int d = 0; d < 3; ++d) {
+    lo[d] = std::numeric_limits<double>::max();
+    hi[d] = -std::numeric_limits<double>::max();
+  }
+  auto scan = [&](std::size_t n, const double *x) {
+    for (std::size_t i = 0; i < n; ++i)
+      for (int d = 0; d < 3; ++d) {
+        lo[d] = std::min(lo[d], x[3 * i + d]);
+        hi[d] = std::max(hi[d], x[3 * i + d]);
+      }
+  };
+  scan(n_src, src_xyz);
+  scan(n_trg, trg_xyz);
+  RootBox box;
+  if (n_src + n_trg == 0) return box;
+  double w = 0;
+  for (int d = 0; d < 3; ++d) {
+    box.center[d] = 0.5 * (lo[d] + hi[d]);
+    w = std::max(w, 0.5 * (hi[d] - lo[d]));
+  }
+  double scale = 0;
+  for (int d = 0; d < 3; ++d) scale = std::max(scale, std::fabs(box.center[d]));
+  // enlarge so that every point maps strictly inside; a degenerate set gets a unit box
+  w = w * (1.0 + 1e-8) + 1e-12 * scale;
+  box.half_width = w > 0 ? w : 1.0;
+  return box;
+}
+
+void morton_keys(const RootBox &root, std::size_t n, const double *xyz, std::vector<uint64_t> &keys)
+{
+  keys.resize(n);
+  const double nmax = double(1u << kMortonBits);
+  const double inv = nmax / (2.0 * root.half_width);
+  double lo[3];
+  for (int d = 0; d < 3; ++d) lo[d] = root.center[d] - root.half_width;
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < n; ++i) {
+    uint32_t a[3];
+    for (int d = 0; d < 3; ++d) {
+      double u = std::floor((xyz[3 * i + d] - lo[d]) * inv);
+      u = std::min(std::max(u, 0.0), nmax - 1);
+      a[d] = (uint32_t) u;
+    }
+    keys[i] = morton_encode(a[0], a[1], a[2]);
+  }
+}
+
+void radix_sort_keys(std::vector<uint64_t> &keys, std::vector<uint32_t> &order)
+{
+  const std::size_t n = keys.size();
+  order.resize(n);
+  for (std::size_t i = 0; i < n; ++i) order[i] = (uint32_t) i;
+  if (n < 2) return;
+  if (n < 256) {
+    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return keys[a] < keys[b]; });
+    std::vector<uint64_t> k2(n);
+    for (std::size_t i = 0; i < n; ++i) k2[i] = keys[order[i]];
+    keys.swap(k2);
+    return;
+  }
+  constexpr int kBits = 11, kBuckets = 1 << kBits;
+  std::vector<uint64_t> kbuf(n);
+  std::vector<uint32_t> obuf(n);
+  std::vector<std::size_t> count(kBuckets);
+  uint64_t all_or = 0, all_and = ~uint64_t(0);
+  for (uint64_t k : keys) {
+    all_or |= k;
+    all_and &= k;
+  }
+  const uint64_t varying = all_or ^ all_and;
+  for (int shift = 0; shift < 64; shift += kBits) {
+    if (((varying >> shift) & (kBuckets - 1)) == 0) continue;    // digit constant: skip pass
+    std::fill(count.begin(), count.end(), 0);
+    for (std::size_t i = 0; i < n; ++i) ++count[(keys[i] >> shift) & (kBuckets - 1)];
+    std::size_t sum = 0;
+    for (int b = 0; b < kBuckets; ++b) {
+      const std::size_t c = count[b];
+      count[b] = sum;
+      sum += c;
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t pos = count[(keys[i] >> shift) & (kBuckets - 1)]++;
+      kbuf[pos] = keys[i];
+      obuf[pos] = order[i];
+    }
+    keys.swap(kbuf);
+    order.swap(obuf);
+  }
+}
+
+bool cells_adjacent(const Cell &a0, const Cell &b0)
+{
+  const Cell &a = a0.level <= b0.level ? a0 : b0;    // a coarser
+  const Cell &b = a0.level <= b0.level ? b0 : a0;
+  const int64_t s = int64_t(1) << (b.level - a.level);
+  const int64_t ax[3] = {a.ix, a.iy, a.iz}, bx[3] = {b.ix, b.iy, b.iz};
+  for (int d = 0; d < 3; ++d) {
+    const int64_t lo = ax[d] * s, hi = (ax[d] + 1) * s;
+    if (bx[d] + 1 < lo || bx[d] > hi) return false;
+  }
+  return true;
+}
+
+void build_octree(Octree &tree, const RootBox &root, std::size_t n_src, const double *src_xyz,
+                  std::size_t n_trg, const double *trg_xyz, int leaf_size, int max_depth)
+{
+  tree.root = root;
+  tree.cells.clear();
+  tree.level_begin.clear();
+  tree.leaves.clear();
+  leaf_size = std::max(leaf_size, 1);
+  max_depth = std::min(std::max(max_depth, 0), kMortonBits);
+
+  std::vector<uint64_t> skeys, tkeys;
+  morton_keys(root, n_src, src_xyz, skeys);
+  morton_keys(root, n_trg, trg_xyz, tkeys);
+  radix_sort_keys(skeys, tree.src_order);
+  radix_sort_keys(tkeys, tree.trg_order);
+
+  Cell rc;
+  rc.src_end = (uint32_t) n_src;
+  rc.trg_end = (uint32_t) n_trg;
+  tree.cells.push_back(rc);
+  tree.level_begin.push_back(0);
+  int level = 0;
+  for (;;) {
+    const int begin = tree.level_begin[level], end = (int) tree.cells.size();
+    for (int ci = begin; ci < end; ++ci) {
+      Cell c = tree.cells[ci];
+      const bool split = level < max_depth &&
+          ((int) c.n_src() > leaf_size || (int) c.n_trg() > leaf_size);
+      if (!split) {
+        tree.leaves.push_back(ci);
+        continue;
+      }
+      const int shift = 3 * (kMortonBits - level - 1);
+      uint32_t sp = c.src_begin, tp = c.trg_begin;
+      const int first = (int) tree.cells.size();
+      int nch = 0;
+      for (int oct = 0; oct < 8; ++oct) {
+        auto digit_le = [&](uint64_t k) { return (int) ((k >> shift) & 7) <= oct; };
+        const uint32_t se = (uint32_t) (std::partition_point(skeys.begin() + sp, skeys.begin() + c.src_end, digit_le) - skeys.begin());
+        const uint32_t te = (uint32_t) (std::partition_point(tkeys.begin() + tp, tkeys.begin() + c.trg_end, digit_le) - tkeys.begin());
+        if (se > sp || te > tp) {
+          Cell ch;
+          ch.level = level + 1;
+          ch.parent = ci;
+          ch.prefix = (c.prefix << 3) | (uint64_t) oct;
+          ch.ix = 2 * c.ix + (oct & 1);
+          ch.iy = 2 * c.iy + ((oct >> 1) & 1);
+          ch.iz = 2 * c.iz + ((oct >> 2) & 1);
+          ch.src_begin = sp;
+          ch.src_end = se;
+          ch.trg_begin = tp;
+          ch.trg_end = te;
+          tree.cells[ci].child[oct] = (int) tree.cells.size();
+          tree.cells.push_back(ch);
+          ++nch;
+        }
+        sp = se;
+        tp = te;
+      }
+      tree.cells[ci].first_child = first;
+      tree.cells[ci].n_children = nch;
+    }
+    if ((int) tree.cells.size() == end) {
+      tree.level_begin.push_back(end);
+      break;
+    }
+    tree.level_begin.push_back(end);
+    ++level;
+  }
+  tree.depth = (int) tree.level_begin.size() - 2;
+}
+
+}    // namespace kifmm

@@ -1,0 +1,66 @@
+// Adaptive octree over sources and targets (separate point sets, one tree).
+//
+// Points are sorted by their 63-bit Morton key (radix sort, stable), then cells are made top
+// down, level by level, from the sorted arrays: a cell is split while it holds more than
+// leaf_size sources or more than leaf_size targets and level < max_depth. Empty children are
+// not created. Cells are stored level by level (level_begin), the children of a cell are
+// contiguous, and every cell owns a contiguous range of the sorted sources and of the sorted
+// targets. The root is the bounding cube of all points, or a fixed box (periodic later).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace kifmm {
+
+struct RootBox {
+  double center[3] = {0, 0, 0};
+  double half_width = 1.0;
+};
+
+struct Cell {
+  uint64_t prefix = 0;        // Morton prefix at this level (see morton.h)
+  int level = 0;
+  int parent = -1;
+  int first_child = -1;       // children are cells[first_child .. first_child + n_children)
+  int n_children = 0;
+  int child[8] = {-1, -1, -1, -1, -1, -1, -1, -1};    // by octant (bit0 x, bit1 y, bit2 z)
+  int ix = 0, iy = 0, iz = 0;                         // integer anchor at this level
+  uint32_t src_begin = 0, src_end = 0;                // range in sorted sources
+  uint32_t trg_begin = 0, trg_end = 0;                // range in sorted targets
+  bool leaf() const { return n_children == 0; }
+  uint32_t n_src() const { return src_end - src_begin; }
+  uint32_t n_trg() const { return trg_end - trg_begin; }
+};
+
+struct Octree {
+  RootBox root;
+  int depth = 0;                      // deepest level present
+  std::vector<Cell> cells;            // level-ordered; cells[0] is the root
+  std::vector<int> level_begin;       // cells of level l: [level_begin[l], level_begin[l+1])
+  std::vector<int> leaves;            // indices of leaf cells
+  std::vector<uint32_t> src_order;    // sorted position -> input source index
+  std::vector<uint32_t> trg_order;    // sorted position -> input target index
+
+  double half_width(int level) const { return root.half_width / double(uint64_t(1) << level); }
+  void center(const Cell &c, double out[3]) const;
+  std::size_t bytes() const;
+};
+
+// Bounding cube of the points (slightly enlarged so every point is strictly inside).
+RootBox bounding_cube(std::size_t n_src, const double *src_xyz, std::size_t n_trg,
+                      const double *trg_xyz);
+
+// Build the tree. Points outside a given root box are clamped into its boundary cells.
+void build_octree(Octree &tree, const RootBox &root, std::size_t n_src, const double *src_xyz,
+                  std::size_t n_trg, const double *trg_xyz, int leaf_size, int max_depth);
+
+// Morton keys (full depth) of points in a root box, and a stable radix sort of them.
+void morton_keys(const RootBox &root, std::size_t n, const double *xyz, std::vector<uint64_t> &keys);
+void radix_sort_keys(std::vector<uint64_t> &keys, std::vector<uint32_t> &order);
+
+// True when closed cells a and b touch or overlap (any level).
+bool cells_adjacent(const Cell &a, const Cell &b);
+
+}    // namespace kifmm

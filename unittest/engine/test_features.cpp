@@ -1,0 +1,2 @@
+#include "test_util.h"
+#include <gtest/gtest.h>

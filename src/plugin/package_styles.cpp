@@ -2,6 +2,8 @@
 
 #include "style_maps.h"
 
+#include "kspace_kifmm.h"
+
 #include "lammps.h"
 
 using namespace LAMMPS_NS;
@@ -10,11 +12,34 @@ namespace kifmm_lammps {
 
 const char *const lammps_version_built_against = KIFMM_LAMMPS_VERSION;
 
+namespace {
+void *make_kspace_kifmm(void *lmp)
+{
+  return new KSpaceKIFMM(static_cast<LAMMPS *>(lmp));
+}
+}    // namespace
+
 const std::vector<lammpsplugin_t> &package_styles()
 {
   // Styles are added here as they are implemented (kspace kifmm, fix kifmm/stride,
   // fix clump/rigid); see src/KIFMM and src/RIGID_CLUMP.
-  static const std::vector<lammpsplugin_t> styles = {};
+  static const std::vector<lammpsplugin_t> styles = [] {
+    std::vector<lammpsplugin_t> v;
+    auto add = [&](const char *kind, const char *name, const char *info) -> lammpsplugin_t & {
+      lammpsplugin_t s{};
+      s.version = lammps_version_built_against;
+      s.style = kind;
+      s.name = name;
+      s.info = info;
+      s.author = "lammps-kifmm developers";
+      s.handle = nullptr;
+      v.push_back(s);
+      return v.back();
+    };
+    add("kspace", "kifmm", "long-range coulomb/gravity/yukawa by the kernel-independent FMM")
+        .creator.v1 = &make_kspace_kifmm;
+    return v;
+  }();
   return styles;
 }
 

@@ -1,0 +1,420 @@
+#include "kspace_kifmm.h"
+
+#include "atom.h"
+#include "comm.h"
+#include "domain.h"
+#include "error.h"
+#include "force.h"
+#include "input.h"
+#include "memory.h"
+#include "pair.h"
+#include "update.h"
+#include "utils.h"
+#include "variable.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <mpi.h>
+#include <random>
+
+using namespace LAMMPS_NS;
+using kifmm_lammps::LongRangeKernel;
+
+namespace {
+std::string default_cache_dir()
+{
+  if (const char *env = std::getenv("KIFMM_CACHE_DIR")) return env;
+  if (const char *xdg = std::getenv("XDG_CACHE_HOME")) return std::string(xdg) + "/lammps-kifmm";
+  if (const char *home = std::getenv("HOME")) return std::string(home) + "/.cache/lammps-kifmm";
+  return "";
+}
+const char *error_variable = "kifmm_error";
+}    // namespace
+
+KSpaceKIFMM::KSpaceKIFMM(LAMMPS *lmp) : KSpace(lmp)
+{
+  // the full long-range sum: no real-space split, no g_ewald for pair styles
+  ewaldflag = pppmflag = msmflag = dispersionflag = tip4pflag = dipoleflag = spinflag = 0;
+  triclinic_support = 0;
+}
+
+KSpaceKIFMM::~KSpaceKIFMM() = default;
+
+void KSpaceKIFMM::settings(int narg, char **arg)
+{
+  if (narg != 1)
+    error->all(FLERR, "Illegal kspace_style kifmm command: expected 1 argument (ACCURACY), got {}",
+               narg);
+  std::string why = kifmm_lammps::parse_accuracy(arg[0], kset);
+  if (!why.empty()) error->all(FLERR, why);
+  accuracy_relative = kset.accuracy;
+}
+
+int KSpaceKIFMM::modify_param(int narg, char **arg)
+{
+  if (strcmp(arg[0], "kifmm") != 0) return 0;
+  std::vector<std::string> args(arg, arg + narg);
+  int consumed = 0;
+  std::string why = kifmm_lammps::parse_kifmm_keywords(args, kset, consumed);
+  if (!why.empty()) error->all(FLERR, why);
+  engine.reset();    // settings changed: new evaluator at init
+  if (kset.check_every > 0) {
+    // the measured error goes to an internal-style variable usable as v_kifmm_error
+    int ivar = input->variable->find(error_variable);
+    if (ivar < 0)
+      input->variable->set(std::string(error_variable) + " internal -1");
+    else if (!input->variable->internalstyle(ivar))
+      error->all(FLERR, "kspace_modify kifmm check: variable {} exists and is not internal-style",
+                 error_variable);
+  }
+  return consumed;
+}
+
+double KSpaceKIFMM::strength_of(int i) const
+{
+  if (kset.kernel == LongRangeKernel::Gravity)
+    return atom->rmass ? atom->rmass[i] : atom->mass[atom->type[i]];
+  return atom->q[i];
+}
+
+double KSpaceKIFMM::force_prefactor() const
+{
+  // engine: grad = d/dx_i sum_j s_j G(x_i, x_j); potential energy U = c/2 sum_i s_i phi_i
+  // coulomb/yukawa: c = qqrd2e (repulsive for like charges): F_i = -qqrd2e q_i grad_i
+  // gravity: c = -G (attractive): F_i = +G m_i grad_i
+  return kset.kernel == LongRangeKernel::Gravity ? kset.gravity_G : -qqrd2e;
+}
+
+double KSpaceKIFMM::energy_prefactor() const
+{
+  return kset.kernel == LongRangeKernel::Gravity ? -kset.gravity_G : qqrd2e;
+}
+
+void KSpaceKIFMM::init()
+{
+  if (domain->triclinic)
+    error->all(FLERR, "kspace_style kifmm does not support triclinic boxes");
+  if (domain->xperiodic || domain->yperiodic || domain->zperiodic)
+    error->all(FLERR,
+               "kspace_style kifmm: periodic boundaries are not supported yet; use boundary "
+               "f, s or m in every dimension");
+  if (kset.kernel == LongRangeKernel::Gravity) {
+    if (!atom->rmass_flag && !atom->mass)
+      error->all(FLERR, "kspace_style kifmm kernel gravity requires per-atom or per-type masses");
+  } else if (!atom->q_flag) {
+    error->all(FLERR,
+               "kspace_style kifmm kernel {} requires atom attribute q (atom_style charge, "
+               "full, hybrid ... charge, or fix property/atom q)",
+               kifmm_lammps::kernel_name(kset.kernel));
+  }
+
+  qqrd2e = force->qqrd2e;
+  scale = 1.0;
+  if (kset.kernel != LongRangeKernel::Gravity) qsum_qsq(0);
+
+  // a coulomb pair style would count coulomb a second time (kifmm sums everything)
+  if (force->pair && kset.kernel != LongRangeKernel::Gravity && comm->me == 0 &&
+      (force->pair_match("coul", 0) || force->pair_match("born/coul", 0)))
+    error->warning(FLERR,
+                   "kspace_style kifmm computes the full coulomb sum; the coulomb part of pair "
+                   "style {} is counted twice",
+                   force->pair_style);
+
+  kifmm::Options opt;
+  double est = 0.0;
+  kifmm::KernelSpec kernel;
+  if (kset.kernel == LongRangeKernel::Yukawa) {
+    kernel.type = kifmm::KernelType::Yukawa;
+    kernel.kappa = kset.kappa;
+  }
+  if (kset.order > 0) {
+    opt.order = kset.order;
+    est = -1.0;
+  } else {
+    kifmm::Choice c = kifmm::choose_order(kernel, kset.accuracy);
+    opt.order = c.order;
+    opt.leaf_size = c.leaf_size;
+    est = c.measured_error;
+  }
+  if (kset.leaf > 0) opt.leaf_size = kset.leaf;
+  if (kset.cache_dir == "none")
+    opt.cache_dir.clear();
+  else
+    opt.cache_dir = kset.cache_dir.empty() ? default_cache_dir() : kset.cache_dir;
+
+  if (!engine || engine_options.order != opt.order || engine_options.leaf_size != opt.leaf_size ||
+      engine_options.cache_dir != opt.cache_dir) {
+    engine = kifmm::make_evaluator(kernel, opt);
+    reported_first_evaluation = false;
+  }
+  engine_options = engine->options();
+  estimated_error = est;
+
+  if (comm->me == 0) {
+    std::string mesg = "KIFMM initialization ...\n";
+    mesg += fmt::format("  kernel = {}", kifmm_lammps::kernel_name(kset.kernel));
+    if (kset.kernel == LongRangeKernel::Gravity) mesg += fmt::format(" (G = {:.8g})", kset.gravity_G);
+    if (kset.kernel == LongRangeKernel::Yukawa) mesg += fmt::format(" (kappa = {:.8g})", kset.kappa);
+    mesg += fmt::format("\n  order = {}, leaf size = {}\n", engine_options.order,
+                        engine_options.leaf_size);
+    if (est >= 0)
+      mesg += fmt::format("  requested relative force error = {:.3g}, calibrated = {:.3g}\n",
+                          kset.accuracy, est);
+    else
+      mesg += "  order set by kspace_modify: error not estimated (use check to measure it)\n";
+    mesg += fmt::format("  operator cache = {}\n",
+                        engine_options.cache_dir.empty() ? "memory only" : engine_options.cache_dir);
+    utils::logmesg(lmp, mesg);
+  }
+}
+
+void KSpaceKIFMM::setup() {}
+
+void KSpaceKIFMM::gather_points()
+{
+  const int nlocal = atom->nlocal;
+  double **x = atom->x;
+  index.clear();
+  xyz.clear();
+  strength.clear();
+  for (int i = 0; i < nlocal; ++i) {
+    const double s = strength_of(i);
+    if (!std::isfinite(s) || !std::isfinite(x[i][0]) || !std::isfinite(x[i][1]) ||
+        !std::isfinite(x[i][2]))
+      error->one(FLERR, "kspace_style kifmm: atom {} has a non-finite {} or position",
+                 atom->tag[i], kset.kernel == LongRangeKernel::Gravity ? "mass" : "charge");
+    if (s == 0.0) continue;    // zero strength: neither source nor target
+    index.push_back(i);
+    xyz.insert(xyz.end(), {x[i][0], x[i][1], x[i][2]});
+    strength.push_back(s);
+  }
+}
+
+// All ranks' points of nonzero strength (replicated on every rank; the distributed engine
+// of the MPI issue replaces this). In serial the local arrays are used as they are.
+void KSpaceKIFMM::gather_sources()
+{
+  replicated = comm->nprocs > 1;
+  if (!replicated) return;
+  const int nprocs = comm->nprocs, mine = (int) index.size();
+  std::vector<int> counts(nprocs), displs(nprocs), counts3(nprocs), displs3(nprocs);
+  MPI_Allgather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, world);
+  int total = 0;
+  for (int p = 0; p < nprocs; ++p) {
+    displs[p] = total;
+    total += counts[p];
+    counts3[p] = 3 * counts[p];
+    displs3[p] = 3 * displs[p];
+  }
+  all_xyz.resize(3 * (std::size_t) total);
+  all_strength.resize(total);
+  MPI_Allgatherv(xyz.data(), 3 * mine, MPI_DOUBLE, all_xyz.data(), counts3.data(),
+                 displs3.data(), MPI_DOUBLE, world);
+  MPI_Allgatherv(strength.data(), mine, MPI_DOUBLE, all_strength.data(), counts.data(),
+                 displs.data(), MPI_DOUBLE, world);
+}
+
+void KSpaceKIFMM::compute(int eflag, int vflag)
+{
+  ev_init(eflag, vflag);
+  energy = 0.0;
+  for (double &v : virial) v = 0.0;
+
+  // grow per-atom arrays if requested (as the KSPACE styles do)
+  if (atom->nmax > maxeatom && eflag_atom) {
+    maxeatom = atom->nmax;
+    memory->destroy(eatom);
+    memory->create(eatom, maxeatom, "kifmm:eatom");
+  }
+  if (atom->nmax > maxvatom && vflag_atom) {
+    maxvatom = atom->nmax;
+    memory->destroy(vatom);
+    memory->create(vatom, maxvatom, 6, "kifmm:vatom");
+  }
+  if (eflag_atom)
+    for (int i = 0; i < atom->nlocal; ++i) eatom[i] = 0.0;
+  if (vflag_atom)
+    for (int i = 0; i < atom->nlocal; ++i)
+      for (int k = 0; k < 6; ++k) vatom[i][k] = 0.0;
+
+  gather_points();
+  const std::size_t n = index.size();
+
+  // sources: the atoms of nonzero strength of all ranks; targets: this rank's
+  // (a replicated source set until the distributed engine lands)
+  gather_sources();
+  const std::size_t nsrc = source_strength().size();
+  const double *sx = source_xyz().data(), *ss = source_strength().data();
+
+  const bool want_potential = eflag_global || eflag_atom;
+  pot.assign(want_potential ? n : 0, 0.0);
+  grad.assign(3 * n, 0.0);
+  if (nsrc > 0)
+    engine->evaluate(nsrc, sx, ss, n, xyz.data(), want_potential ? pot.data() : nullptr,
+                     grad.data());
+
+  double **f = atom->f;
+  const double cf = force_prefactor(), ce = energy_prefactor();
+  double e_local = 0.0;
+  double v_local[6] = {0, 0, 0, 0, 0, 0};
+  for (std::size_t k = 0; k < n; ++k) {
+    const int i = index[k];
+    const double s = strength[k];
+    const double fx = cf * s * grad[3 * k], fy = cf * s * grad[3 * k + 1],
+                 fz = cf * s * grad[3 * k + 2];
+    f[i][0] += fx;
+    f[i][1] += fy;
+    f[i][2] += fz;
+    if (want_potential) {
+      const double e = 0.5 * ce * s * pot[k];
+      e_local += e;
+      if (eflag_atom) eatom[i] += e;
+    }
+    if (vflag_global) {
+      // open system: W_ab = sum_i x_ia F_ib (equal to the pairwise sum_{i<j} r_ij,a F_ij,b)
+      const double *xi = &xyz[3 * k];
+      v_local[0] += xi[0] * fx;
+      v_local[1] += xi[1] * fy;
+      v_local[2] += xi[2] * fz;
+      v_local[3] += xi[0] * fy;
+      v_local[4] += xi[0] * fz;
+      v_local[5] += xi[1] * fz;
+    }
+  }
+  // kspace energy and virial are global values (LAMMPS's computes add them after their own
+  // reduction over ranks), as in the KSPACE styles
+  if (eflag_global) MPI_Allreduce(&e_local, &energy, 1, MPI_DOUBLE, MPI_SUM, world);
+  if (vflag_global) MPI_Allreduce(v_local, virial, 6, MPI_DOUBLE, MPI_SUM, world);
+
+  if (vflag_atom && nsrc > 0) {
+    double center[3] = {0, 0, 0};
+    per_atom_virial(cf, center);
+  }
+
+  if (!reported_first_evaluation) report_first_evaluation();
+  if (kset.check_every > 0 && update->ntimestep % kset.check_every == 0) check_error();
+}
+
+// Per-atom virial v_i,ab = 1/2 sum_j (x_i - x_j)_a F_ij,b, origin independent, as LAMMPS's pair
+// styles tally it. sum_j x_j,a F_ij,b = c s_i d_b psi_a(x_i), with psi_a the potential of
+// strengths s_j x_j,a: three more gradient evaluations, done only when a compute asks.
+void KSpaceKIFMM::per_atom_virial(double cf, double center[3])
+{
+  const std::size_t n = index.size();
+  // center the coordinates to limit cancellation
+  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+  for (std::size_t k = 0; k < n; ++k)
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::min(lo[d], xyz[3 * k + d]);
+      hi[d] = std::max(hi[d], xyz[3 * k + d]);
+    }
+  double glo[3], ghi[3];
+  MPI_Allreduce(lo, glo, 3, MPI_DOUBLE, MPI_MIN, world);
+  MPI_Allreduce(hi, ghi, 3, MPI_DOUBLE, MPI_MAX, world);
+  for (int d = 0; d < 3; ++d) center[d] = 0.5 * (glo[d] + ghi[d]);
+
+  // all sources, strengths s_j (x_j,a - c_a)
+  const std::vector<double> &all_xyz = source_xyz(), &all_s = source_strength();
+  const std::size_t nsrc = all_s.size();
+  std::vector<double> moment(nsrc), g(3 * n);
+  for (int a = 0; a < 3; ++a) {
+    for (std::size_t j = 0; j < nsrc; ++j) moment[j] = all_s[j] * (all_xyz[3 * j + a] - center[a]);
+    std::fill(g.begin(), g.end(), 0.0);
+    engine->evaluate(nsrc, all_xyz.data(), moment.data(), n, xyz.data(), nullptr, g.data());
+    for (std::size_t k = 0; k < n; ++k) {
+      const int i = index[k];
+      const double s = strength[k];
+      const double xa = xyz[3 * k + a] - center[a];
+      // F_i,b = cf s_i grad_b ; sum_j x_j,a F_ij,b = cf s_i g_b
+      double w[3];
+      for (int b = 0; b < 3; ++b) w[b] = 0.5 * (xa * cf * s * grad[3 * k + b] - cf * s * g[3 * k + b]);
+      // LAMMPS order: xx, yy, zz, xy, xz, yz
+      if (a == 0) {
+        vatom[i][0] += w[0];
+        vatom[i][3] += w[1];
+        vatom[i][4] += w[2];
+      } else if (a == 1) {
+        vatom[i][1] += w[1];
+        vatom[i][5] += w[2];
+      } else {
+        vatom[i][2] += w[2];
+      }
+    }
+  }
+}
+
+void KSpaceKIFMM::check_error()
+{
+  // exact gradient on a random sample of this rank's points, by direct summation over all
+  // sources; error = ||F_fmm - F_exact|| / ||F_exact|| over the sample
+  const std::size_t n = index.size();
+  const std::vector<double> &all_xyz = source_xyz(), &all_s = source_strength();
+  bigint ntotal = 0, nmine = (bigint) n;
+  MPI_Allreduce(&nmine, &ntotal, 1, MPI_LMP_BIGINT, MPI_SUM, world);
+  std::vector<std::size_t> sample;
+  if (ntotal > 0 && n > 0) {
+    std::size_t want = (std::size_t) std::ceil((double) kset.check_samples * n / (double) ntotal);
+    want = std::min(want, n);
+    std::mt19937_64 rng(1234567ULL + 7919ULL * (unsigned long long) update->ntimestep +
+                        104729ULL * (unsigned long long) comm->me);
+    if (want == n)
+      for (std::size_t k = 0; k < n; ++k) sample.push_back(k);
+    else {
+      std::uniform_int_distribution<std::size_t> pick(0, n - 1);
+      for (std::size_t k = 0; k < want; ++k) sample.push_back(pick(rng));
+    }
+  }
+  std::vector<double> txyz(3 * sample.size()), exact(3 * sample.size(), 0.0);
+  for (std::size_t k = 0; k < sample.size(); ++k)
+    for (int d = 0; d < 3; ++d) txyz[3 * k + d] = xyz[3 * sample[k] + d];
+  if (!sample.empty())
+    kifmm::direct_sum(engine->kernel(), all_s.size(), all_xyz.data(), all_s.data(), sample.size(),
+                      txyz.data(), nullptr, exact.data());
+  double sums[2] = {0, 0};
+  for (std::size_t k = 0; k < sample.size(); ++k) {
+    const double s = strength[sample[k]];
+    for (int d = 0; d < 3; ++d) {
+      const double e = exact[3 * k + d] * s, a = grad[3 * sample[k] + d] * s;
+      sums[0] += (a - e) * (a - e);
+      sums[1] += e * e;
+    }
+  }
+  double tot[2];
+  MPI_Allreduce(sums, tot, 2, MPI_DOUBLE, MPI_SUM, world);
+  last_measured_error = tot[1] > 0 ? std::sqrt(tot[0] / tot[1]) : 0.0;
+  int ivar = input->variable->find(error_variable);
+  if (ivar >= 0) input->variable->internal_set(ivar, last_measured_error);
+  if (comm->me == 0)
+    utils::logmesg(lmp, "KIFMM check at step {}: measured relative force error {:.3e} on {} atoms\n",
+                   update->ntimestep, last_measured_error,
+                   std::min<bigint>(ntotal, kset.check_samples));
+}
+
+void KSpaceKIFMM::report_first_evaluation()
+{
+  reported_first_evaluation = true;
+  const kifmm::Stats &s = engine->stats();
+  if (comm->me == 0)
+    utils::logmesg(lmp,
+                   "  KIFMM first evaluation: {} sources, tree depth {}, {} cells, {} leaves, "
+                   "{} coincident pairs excluded\n"
+                   "  precompute {:.3g} s, operators {:.3g} MB, tree {:.3g} MB\n",
+                   s.n_sources, s.depth, s.n_cells, s.n_leaves, s.coincident_pairs,
+                   s.t_precompute, s.operator_bytes / 1048576.0, s.tree_bytes / 1048576.0);
+}
+
+const kifmm::Stats &KSpaceKIFMM::engine_stats() const
+{
+  return engine->stats();
+}
+
+double KSpaceKIFMM::memory_usage()
+{
+  double bytes = (double) (xyz.capacity() + strength.capacity() + pot.capacity() +
+                           grad.capacity()) * sizeof(double) +
+      (double) index.capacity() * sizeof(int);
+  if (engine) bytes += (double) (engine->stats().operator_bytes + engine->stats().tree_bytes);
+  bytes += (double) maxeatom * sizeof(double) + (double) maxvatom * 6 * sizeof(double);
+  return bytes;
+}

@@ -1,0 +1,59 @@
+// kspace_style kifmm: the full long-range sum (no real-space split) by the KIFMM engine.
+// Kernels: coulomb (atom q, qqrd2e), gravity (mass, G, attractive), yukawa (screened coulomb
+// as pair coul/debye). Open boundaries. Thin adapter: gathers the atoms of nonzero strength,
+// calls kifmm::Evaluator, scatters forces, energy and virial. See doc/kspace_kifmm.rst.
+#pragma once
+
+#include "kifmm.h"
+#include "kifmm_keywords.h"
+#include "kspace.h"
+
+#include <memory>
+#include <vector>
+
+namespace LAMMPS_NS {
+
+class KSpaceKIFMM : public KSpace {
+ public:
+  KSpaceKIFMM(class LAMMPS *);
+  ~KSpaceKIFMM() override;
+  void settings(int, char **) override;
+  void init() override;
+  void setup() override;
+  void compute(int, int) override;
+  int modify_param(int, char **) override;
+  double memory_usage() override;
+
+  // last measured relative RMS force error of `check` (negative when never measured)
+  double measured_error() const { return last_measured_error; }
+  const kifmm::Stats &engine_stats() const;
+
+ private:
+  kifmm_lammps::KIFMMSettings kset;
+  std::unique_ptr<kifmm::Evaluator> engine;
+  kifmm::Options engine_options;
+  double estimated_error = 0.0;
+  double last_measured_error = -1.0;
+  bool reported_first_evaluation = false;
+
+  // atoms of nonzero strength, reused between calls
+  std::vector<int> index;              // local atom index of each point
+  std::vector<double> xyz, strength;   // positions, q or m
+  std::vector<double> pot, grad;
+  // sources of all ranks (replicated when running on more than one rank)
+  bool replicated = false;
+  std::vector<double> all_xyz, all_strength;
+  const std::vector<double> &source_xyz() const { return replicated ? all_xyz : xyz; }
+  const std::vector<double> &source_strength() const { return replicated ? all_strength : strength; }
+  void gather_sources();
+
+  double strength_of(int i) const;
+  double force_prefactor() const;    // F_i = prefactor * s_i * grad_i
+  double energy_prefactor() const;   // E = prefactor * 0.5 * sum s_i phi_i
+  void gather_points();
+  void per_atom_virial(double prefactor, double center[3]);
+  void check_error();
+  void report_first_evaluation();
+};
+
+}    // namespace LAMMPS_NS

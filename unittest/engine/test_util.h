@@ -107,6 +107,26 @@ struct Errors {
   double pot = 0, grad = 0;
 };
 
+// Direct-sum reference values for a source/target configuration.
+struct Reference {
+  std::vector<double> pot, grad;
+};
+inline Reference reference(const kifmm::KernelSpec &k, const Points &src, const Points &t)
+{
+  Reference r;
+  r.pot.resize(t.size());
+  r.grad.resize(3 * t.size());
+  kifmm::direct_sum(k, src.size(), src.xyz.data(), src.q.data(), t.size(), t.xyz.data(), r.pot.data(), r.grad.data());
+  return r;
+}
+inline Errors fmm_errors(kifmm::Evaluator &ev, const Points &src, const Points &t, const Reference &ref)
+{
+  const std::size_t nt = t.size();
+  std::vector<double> p(nt), g(3 * nt);
+  ev.evaluate(src.size(), src.xyz.data(), src.q.data(), nt, t.xyz.data(), p.data(), g.data());
+  return Errors{rel_l2(p, ref.pot), rel_l2(g, ref.grad)};
+}
+
 // FMM vs direct sum (targets = sources unless given).
 inline Errors fmm_errors(kifmm::Evaluator &ev, const Points &src, const Points *trg = nullptr)
 {

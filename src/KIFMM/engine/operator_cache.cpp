@@ -41,6 +41,8 @@ std::map<std::pair<std::string, int>, std::shared_ptr<const OperatorSet>> &memor
   return c;
 }
 
+OperatorCacheCounters g_counters;
+
 std::vector<std::vector<double> *> arrays(OperatorSet &op)
 {
   std::vector<std::vector<double> *> a = {&op.uc2e_a, &op.uc2e_b, &op.dc2e_a, &op.dc2e_b};
@@ -161,14 +163,22 @@ std::shared_ptr<const OperatorSet> get_operator_set(const UnitKernel &k, int p, 
   if (!cache_dir.empty()) {
     path = operator_cache_file(cache_dir, k.id, p);
     op = read_operator_file(path, k.id, p);
+    if (op) ++g_counters.disk_reads;
   }
   if (!op) {
     op = compute_operators(k, p);
-    if (!path.empty()) write_operator_file(path, *op);    // best effort
+    ++g_counters.computed;
+    if (!path.empty() && write_operator_file(path, *op)) ++g_counters.disk_writes;    // best effort
   }
   mc[key] = op;
   if (t_setup) *t_setup += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return op;
+}
+
+OperatorCacheCounters operator_cache_counters()
+{
+  std::lock_guard<std::mutex> lock(cache_mutex());
+  return g_counters;
 }
 
 void clear_operator_memory_cache()

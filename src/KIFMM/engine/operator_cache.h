@@ -16,6 +16,12 @@ namespace kifmm {
 std::shared_ptr<const OperatorSet> get_operator_set(const UnitKernel &k, int p,
                                                     const std::string &cache_dir, double *t_setup);
 
+// Counters since process start (tests): operator sets computed, read from disk, written.
+struct OperatorCacheCounters {
+  long computed = 0, disk_reads = 0, disk_writes = 0;
+};
+OperatorCacheCounters operator_cache_counters();
+
 // Drop the in-memory cache (tests; operators held by evaluators stay alive).
 void clear_operator_memory_cache();
 

@@ -1,0 +1,488 @@
+// kspace_style kifmm in LAMMPS against exact references computed by LAMMPS itself:
+// pair coul/cut (and coul/debye) with a cutoff larger than the box under boundary f f f is an
+// exact direct sum of the same physics.
+#include "configurations.h"
+#include "kspace_kifmm.h"
+#include "lammps_fixture.h"
+#include "yaml_reference.h"
+
+#include "atom.h"
+#include "force.h"
+#include "lammps.h"
+#include "library.h"
+
+#include <cmath>
+#include <cstdio>
+
+using namespace kifmm_test;
+
+namespace {
+
+struct Result {
+  std::map<int, Vec3> f;
+  double energy = 0;
+};
+
+class KSpaceKifmm : public LammpsFixture {
+ protected:
+  std::string data_path;
+
+  void SetUp() override
+  {
+    LammpsFixture::SetUp();
+    std::string name = testing::UnitTest::GetInstance()->current_test_info()->name();
+    for (char &c : name)
+      if (c == '/') c = '_';
+    data_path = testing::TempDir() + "kifmm_kspace_" + name + ".data";
+  }
+  void TearDown() override
+  {
+    std::remove(data_path.c_str());
+    LammpsFixture::TearDown();
+  }
+
+  void load(const Configuration &c, const std::string &atom_style = "charge")
+  {
+    write_charge_data(data_path, c);
+    commands("units lj\natom_style " + atom_style + "\nboundary f f f\natom_modify map array\n"
+             "read_data " + data_path + "\nthermo_style custom step pe elong press\n"
+             "thermo_modify norm no\nneighbor 0.01 bin\nneigh_modify one 10000 page 200000\n");
+  }
+
+  // exact sum of the same physics by LAMMPS's own pair style
+  Result exact(const std::string &pair = "coul/cut 5.0")
+  {
+    commands("kspace_style none\npair_style " + pair + "\npair_coeff * *\nrun 0 post no");
+    return {forces_by_id(), thermo("pe")};
+  }
+
+  Result kifmm(const std::string &accuracy, const std::string &modify = "")
+  {
+    commands("pair_style zero 0.01\npair_coeff * *\nkspace_style kifmm " + accuracy);
+    if (!modify.empty()) command("kspace_modify kifmm " + modify);
+    command("run 0 post no");
+    return {forces_by_id(), thermo("elong")};
+  }
+
+  LAMMPS_NS::KSpaceKIFMM *kspace()
+  {
+    return dynamic_cast<LAMMPS_NS::KSpaceKIFMM *>(lmp->force->kspace);
+  }
+};
+
+double rel(double a, double b)
+{
+  return std::fabs(a - b) / std::fabs(b);
+}
+
+// ---------------------------------------------------------------- accuracy
+
+struct AccuracyCase {
+  const char *name;
+  Configuration (*make)(int, unsigned);
+};
+
+Configuration make_uniform(int n, unsigned s) { return uniform_cube(n, s); }
+Configuration make_plummer(int n, unsigned s) { return plummer(n, s); }
+Configuration make_dipoles(int n, unsigned s) { return dipoles(n, s); }
+Configuration make_clusters(int n, unsigned s) { return two_clusters(n, s); }
+
+class Accuracy : public KSpaceKifmm, public ::testing::WithParamInterface<AccuracyCase> {};
+
+TEST_P(Accuracy, MeasuredErrorWithinRequested)
+{
+  load(GetParam().make(4000, 17));
+  Result ref = exact();
+  for (const char *acc : {"1e-3", "1e-5", "1e-7"}) {
+    Result r = kifmm(acc);
+    double err = relative_force_error(r.f, ref.f);
+    EXPECT_LE(err, std::stod(acc)) << GetParam().name << " accuracy " << acc;
+    EXPECT_LE(rel(r.energy, ref.energy), 10 * std::stod(acc)) << GetParam().name << " energy";
+    printf("  %-10s accuracy %s: measured force error %.2e, energy error %.2e\n",
+           GetParam().name, acc, err, rel(r.energy, ref.energy));
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Configurations, Accuracy,
+                         ::testing::Values(AccuracyCase{"uniform", make_uniform},
+                                           AccuracyCase{"plummer", make_plummer},
+                                           AccuracyCase{"dipoles", make_dipoles},
+                                           AccuracyCase{"clusters", make_clusters}),
+                         [](const auto &info) { return std::string(info.param.name); });
+
+// ---------------------------------------------------------------- kernels
+
+TEST_F(KSpaceKifmm, GravityIsAttractiveNewtonianWithPerTypeMasses)
+{
+  // gravity on masses m: F = -G * (coulomb force of charges q = m), E = -G * E_coulomb
+  Configuration c = uniform_cube(2000, 5);
+  c.type_mass = {1.0, 3.0};
+  c.type.resize(c.x.size());
+  for (size_t i = 0; i < c.x.size(); ++i) {
+    c.type[i] = 1 + (int) (i % 2);
+    c.q[i] = c.type_mass[c.type[i] - 1];
+  }
+  load(c);
+  Result ref = exact();
+  const double G = 2.5;
+  Result r = kifmm("1e-6", "kernel gravity 2.5");
+  for (auto &[id, f] : ref.f)
+    for (double &v : f) v *= -G;
+  EXPECT_LE(relative_force_error(r.f, ref.f), 1e-6);
+  EXPECT_LT(r.energy, 0.0);
+  EXPECT_LE(rel(r.energy, -G * ref.energy), 1e-6);
+}
+
+TEST_F(KSpaceKifmm, GravityOfTwoSpheresWithPerAtomMass)
+{
+  // atom_style sphere: per-atom rmass; F = G m1 m2 / r^2 toward each other, E = -G m1 m2 / r
+  commands(R"(
+    units lj
+    atom_style sphere
+    boundary f f f
+    region box block -5 5 -5 5 -5 5
+    create_box 1 box
+    create_atoms 1 single 0 0 0
+    create_atoms 1 single 0 3 0
+    set atom 1 mass 2.0
+    set atom 2 mass 5.0
+    pair_style zero 0.1
+    pair_coeff * *
+    kspace_style kifmm 1e-6
+    kspace_modify kifmm kernel gravity 0.7
+    thermo_style custom step pe elong
+    thermo_modify norm no
+    run 0 post no
+  )");
+  auto f = forces_by_id();
+  const double F = 0.7 * 2.0 * 5.0 / 9.0;
+  EXPECT_NEAR(f[1][1], F, 1e-12 * F);
+  EXPECT_NEAR(f[2][1], -F, 1e-12 * F);
+  EXPECT_NEAR(f[1][0], 0.0, 1e-14);
+  EXPECT_NEAR(thermo("elong"), -0.7 * 10.0 / 3.0, 1e-12);
+}
+
+TEST_F(KSpaceKifmm, YukawaEqualsCoulDebye)
+{
+  load(uniform_cube(3000, 9));
+  Result ref = exact("coul/debye 4.0 5.0");
+  Result r = kifmm("1e-6", "kernel yukawa 4.0");
+  double err = relative_force_error(r.f, ref.f);
+  printf("  yukawa kappa 4: force error %.2e, energy error %.2e\n", err, rel(r.energy, ref.energy));
+  EXPECT_LE(err, 1e-6);
+  EXPECT_LE(rel(r.energy, ref.energy), 1e-6);
+}
+
+TEST_F(KSpaceKifmm, DielectricScalesCoulomb)
+{
+  load(uniform_cube(500, 3));
+  Result plain = kifmm("1e-6");
+  command("dielectric 4.0");
+  Result scaled = kifmm("1e-6");
+  EXPECT_NEAR(scaled.energy, plain.energy / 4.0, 1e-12 * std::fabs(plain.energy));
+  EXPECT_NEAR(scaled.f[7][2], plain.f[7][2] / 4.0, 1e-12 * std::fabs(plain.f[7][2]) + 1e-300);
+}
+
+// ---------------------------------------------------------------- atom styles
+
+class AtomStyles : public KSpaceKifmm, public ::testing::WithParamInterface<const char *> {};
+
+TEST_P(AtomStyles, TwoChargesGiveCoulombsLaw)
+{
+  std::string style = GetParam();
+  std::string setup = "units lj\nboundary f f f\n";
+  if (style == "sphere+property")
+    setup += "atom_style sphere\n";
+  else
+    setup += "atom_style " + style + "\n";
+  setup += "region box block -5 5 -5 5 -5 5\ncreate_box 1 box" +
+      std::string(style == "full" ? " bond/types 1 extra/bond/per/atom 1\n" : "\n");
+  if (style == "sphere+property") setup += "fix qprop all property/atom q\n";
+  setup += R"(
+    create_atoms 1 single 0 0 0
+    create_atoms 1 single 2 0 0
+    mass * 1.0
+    set atom 1 charge 1.5
+    set atom 2 charge -2.0
+    pair_style zero 0.1
+    pair_coeff * *
+    kspace_style kifmm 1e-6
+    thermo_style custom step pe elong
+    thermo_modify norm no
+    run 0 post no
+  )";
+  if (style == "sphere+property" || style == "hybrid sphere charge")
+    setup.replace(setup.find("mass * 1.0"), 10, "set group all mass 1.0");
+  commands(setup);
+  auto f = forces_by_id();
+  EXPECT_NEAR(thermo("elong"), -1.5, 1e-12);
+  EXPECT_NEAR(f[1][0], 0.75, 1e-12);
+  EXPECT_NEAR(f[2][0], -0.75, 1e-12);
+}
+
+INSTANTIATE_TEST_SUITE_P(Styles, AtomStyles,
+                         ::testing::Values("charge", "full", "hybrid sphere charge",
+                                           "sphere+property"),
+                         [](const auto &info) {
+                           std::string n = info.param;
+                           for (char &ch : n)
+                             if (!isalnum((unsigned char) ch)) ch = '_';
+                           return n;
+                         });
+
+// ---------------------------------------------------------------- energy, virial, per-atom
+
+TEST_F(KSpaceKifmm, GlobalVirialIsMinusEnergyDerivativeUnderScaling)
+{
+  load(plummer(2000, 4, 0.1));
+  kifmm("1e-9", "order 12 leaf 64");    // small leaves: most pairs in the far field
+  const double wxx = lmp->force->kspace->virial[0], wyy = lmp->force->kspace->virial[1],
+               wzz = lmp->force->kspace->virial[2];
+  const double u0 = thermo("elong");
+  // U(x -> (1+e) x) : dU/de = -W_xx
+  const double eps = 1e-5;
+  double **x = lmp->atom->x;
+  const int n = lmp->atom->nlocal;
+  auto energy_scaled_x = [&](double s) {
+    for (int i = 0; i < n; ++i) x[i][0] *= s;
+    command("run 0 post no");
+    double u = thermo("elong");
+    for (int i = 0; i < n; ++i) x[i][0] /= s;
+    return u;
+  };
+  double dudx = (energy_scaled_x(1 + eps) - energy_scaled_x(1 - eps)) / (2 * eps);
+  EXPECT_NEAR(dudx, -wxx, 1e-6 * std::fabs(wxx));
+  // for 1/r the trace of the virial equals the energy (homogeneity of degree -1)
+  EXPECT_NEAR(wxx + wyy + wzz, u0, 1e-7 * std::fabs(u0));
+}
+
+TEST_F(KSpaceKifmm, PressureAndPerAtomValuesEqualPairCoulCut)
+{
+  load(uniform_cube(1500, 8));
+  const std::string computes =
+      "compute pea all pe/atom\ncompute sa all stress/atom NULL\ncompute p all pressure NULL virial\n"
+      "compute sumpe all reduce sum c_pea\ncompute sums all reduce sum c_sa[1] c_sa[2] c_sa[4]\n";
+  commands(computes);
+  commands("thermo_style custom step pe c_p[1] c_p[2] c_p[4] c_sumpe c_sums[1]\n"
+           "thermo_modify norm no\nkspace_style none\n"
+           "pair_style coul/cut 5.0\npair_coeff * *\nrun 0 post no");
+  const int n = lmp->atom->nlocal;
+  // per-atom values ordered by atom ID (LAMMPS may sort atoms between runs)
+  auto per_atom = [&](const char *id, int cols) {
+    std::vector<double> v((size_t) n * cols);
+    const auto *tag = lmp->atom->tag;
+    if (cols == 1) {
+      auto *p = (double *) lammps_extract_compute(lmp, id, LMP_STYLE_ATOM, LMP_TYPE_VECTOR);
+      for (int i = 0; i < n; ++i) v[tag[i] - 1] = p[i];
+    } else {
+      auto **p = (double **) lammps_extract_compute(lmp, id, LMP_STYLE_ATOM, LMP_TYPE_ARRAY);
+      for (int i = 0; i < n; ++i)
+        for (int k = 0; k < cols; ++k) v[(size_t) (tag[i] - 1) * cols + k] = p[i][k];
+    }
+    return v;
+  };
+  double p_ref[3] = {evaluate("c_p[1]"), evaluate("c_p[2]"), evaluate("c_p[4]")};
+  auto pe_ref = per_atom("pea", 1);
+  auto s_ref = per_atom("sa", 6);
+
+  commands("pair_style zero 0.01\npair_coeff * *\nkspace_style kifmm 1e-9\n"
+           "kspace_modify kifmm order 12 leaf 64\nrun 0 post no");
+  double p_fmm[3] = {evaluate("c_p[1]"), evaluate("c_p[2]"), evaluate("c_p[4]")};
+  auto pe_fmm = per_atom("pea", 1);
+  auto s_fmm = per_atom("sa", 6);
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(p_fmm[k], p_ref[k], 1e-7 * std::fabs(p_ref[0])) << k;
+  EXPECT_NEAR(evaluate("c_sumpe"), evaluate("pe"), 1e-9 * std::fabs(evaluate("pe")));
+  double num = 0, den = 0;
+  for (int i = 0; i < n; ++i) {
+    num += (pe_fmm[i] - pe_ref[i]) * (pe_fmm[i] - pe_ref[i]);
+    den += pe_ref[i] * pe_ref[i];
+  }
+  EXPECT_LE(std::sqrt(num / den), 1e-7) << "per-atom energy";
+  num = den = 0;
+  for (size_t k = 0; k < s_ref.size(); ++k) {
+    num += (s_fmm[k] - s_ref[k]) * (s_fmm[k] - s_ref[k]);
+    den += s_ref[k] * s_ref[k];
+  }
+  EXPECT_LE(std::sqrt(num / den), 1e-6) << "per-atom virial (stress/atom)";
+}
+
+// ---------------------------------------------------------------- what is skipped
+
+TEST_F(KSpaceKifmm, ZeroChargesStayOutOfTheTree)
+{
+  Configuration c = uniform_cube(1000, 2);
+  for (size_t i = 0; i < c.q.size(); i += 4) c.q[i] = 0.0;
+  for (size_t i = 2; i < c.q.size(); i += 4) c.q[i] = 0.0;    // keeps neutrality
+  load(c);
+  Result ref = exact();
+  Result r = kifmm("1e-6");
+  EXPECT_EQ(kspace()->engine_stats().n_sources, 500u);
+  EXPECT_LE(relative_force_error(r.f, ref.f), 1e-6);
+}
+
+TEST_F(KSpaceKifmm, AllChargesZeroCostNothing)
+{
+  Configuration c = uniform_cube(1000, 2);
+  for (double &q : c.q) q = 0.0;
+  load(c);
+  Result r = kifmm("1e-4");
+  EXPECT_EQ(kspace()->engine_stats().n_sources, 0u);
+  EXPECT_EQ(r.energy, 0.0);
+  for (auto &[id, f] : r.f) EXPECT_EQ(f[0] * f[0] + f[1] * f[1] + f[2] * f[2], 0.0);
+}
+
+TEST_F(KSpaceKifmm, CheckMeasuresTheErrorIntoAVariable)
+{
+  load(uniform_cube(3000, 6));
+  Result ref = exact();
+  Result r = kifmm("1e-4", "order 4 leaf 32 check 1 3000");
+  double full = relative_force_error(r.f, ref.f);
+  double measured = evaluate("v_kifmm_error");
+  EXPECT_GT(measured, 1e-8) << "order 4 must have a visible far-field error";
+  // with every atom sampled the check is the exact error
+  EXPECT_NEAR(measured, full, 1e-3 * full);
+  EXPECT_DOUBLE_EQ(kspace()->measured_error(), measured);
+}
+
+TEST_F(KSpaceKifmm, CoulombPairStyleGivesDoubleCountingWarning)
+{
+  load(uniform_cube(100, 1));
+  commands("pair_style coul/cut 2.0\npair_coeff * *\nkspace_style kifmm 1e-4");
+  char *buf = nullptr;
+  size_t len = 0;
+  FILE *mem = open_memstream(&buf, &len);
+  lmp->screen = mem;
+  command("run 0 post no");
+  fflush(mem);
+  lmp->screen = nullptr;
+  fclose(mem);
+  std::string out(buf, len);
+  free(buf);
+  EXPECT_NE(out.find("counted twice"), std::string::npos) << out;
+}
+
+// ---------------------------------------------------------------- dynamics
+
+TEST_F(KSpaceKifmm, GranularWallsRunWithKifmm)
+{
+  commands(R"(
+    units lj
+    atom_style hybrid sphere charge
+    boundary f f f
+    comm_modify vel yes
+    region box block 0 1 0 1 0 1 units box
+    create_box 1 box
+    lattice sc 512.0 origin 0.5 0.5 0.5
+    region inner block 0.1 0.9 0.1 0.9 0.1 0.9 units box
+    create_atoms 1 region inner
+    set group all diameter 0.05
+    set group all density 1000.0
+    variable q atom 0.02*(2*(id%2)-1)
+    set group all charge v_q
+    pair_style gran/hooke/history 2000.0 NULL 50.0 NULL 0.5 0
+    pair_coeff * *
+    fix wx all wall/gran hooke/history 2000.0 NULL 50.0 NULL 0.5 0 xplane 0.0 1.0
+    fix wy all wall/gran hooke/history 2000.0 NULL 50.0 NULL 0.5 0 yplane 0.0 1.0
+    fix wz all wall/gran hooke/history 2000.0 NULL 50.0 NULL 0.5 0 zplane 0.0 1.0
+    fix move all nve/sphere
+    kspace_style kifmm 1e-4
+    timestep 0.0005
+    thermo_style custom step atoms ke elong
+    thermo_modify norm no lost error
+    run 1000 post no
+  )");
+  EXPECT_EQ(natoms(), 216) << "no particle may leave the walled box";
+  EXPECT_TRUE(std::isfinite(thermo("elong")));
+  EXPECT_LT(thermo("elong"), 0.0) << "alternating charges attract: negative energy";
+  EXPECT_GT(thermo("ke"), 0.0) << "the charges must have moved";
+  for (auto &[id, x] : positions_by_id())
+    for (double v : x) {
+      EXPECT_GE(v, 0.0);
+      EXPECT_LE(v, 1.0);
+    }
+}
+
+// NVE energy conservation with kifmm close to that with the exact direct sum
+TEST_F(KSpaceKifmm, NVEEnergyConservationCloseToDirectSum)
+{
+  auto run = [&](const std::string &coulomb) {
+    create();
+    commands(R"(
+      units lj
+      atom_style charge
+      boundary s s s
+      lattice sc 0.3
+      region box block 0 10 0 10 0 10 units box
+      region inner block 0.5 9.5 0.5 9.5 0.5 9.5 units box
+      create_box 2 box
+      create_atoms 1 region inner
+      set type 1 type/fraction 2 0.5 12345
+      displace_atoms all random 0.1 0.1 0.1 4711 units box
+      mass * 1.0
+      set type 1 charge 1.0
+      set type 2 charge -1.0
+      velocity all create 1.0 777 loop geom
+      fix nve all nve
+      timestep 0.001
+      thermo_style custom step etotal
+      thermo_modify norm no
+    )");
+    commands(coulomb);
+    command("run 0 post no");
+    const double e0 = thermo("etotal");
+    double maxdev = 0;
+    for (int k = 0; k < 10; ++k) {
+      command("run 100 post no");
+      maxdev = std::max(maxdev, std::fabs(thermo("etotal") - e0));
+    }
+    return maxdev / std::fabs(e0);
+  };
+  // soft repulsion keeps opposite charges apart in both runs
+  double direct = run("pair_style hybrid/overlay soft 1.0 coul/cut 30.0\npair_coeff * * soft 20.0\n"
+                      "pair_coeff * * coul/cut");
+  double fmm = run("pair_style soft 1.0\npair_coeff * * 20.0\nkspace_style kifmm 1e-7");
+  printf("  NVE 1000 steps: relative energy drift direct %.3e, kifmm(1e-7) %.3e, ratio %.2f\n",
+         direct, fmm, fmm / direct);
+  EXPECT_LE(fmm, 2.0 * direct + 1e-7);
+}
+
+// ---------------------------------------------------------------- errors
+
+TEST_F(KSpaceKifmm, PeriodicBoundaryIsAClearError)
+{
+  commands("units lj\natom_style charge\nboundary p p f\nregion box block 0 1 0 1 0 1\n"
+           "create_box 1 box\ncreate_atoms 1 single 0.5 0.5 0.5\nmass 1 1.0\n"
+           "pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "kifmm: periodic boundaries are not supported yet");
+}
+
+TEST_F(KSpaceKifmm, MissingChargeAttributeIsAClearError)
+{
+  commands("units lj\natom_style atomic\nboundary f f f\nregion box block 0 1 0 1 0 1\n"
+           "create_box 1 box\ncreate_atoms 1 single 0.5 0.5 0.5\nmass 1 1.0\n"
+           "pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "requires atom attribute q");
+}
+
+TEST_F(KSpaceKifmm, BadArgumentsNameTheToken)
+{
+  EXPECT_LAMMPS_ERROR(command("kspace_style kifmm 0"), "accuracy 0 is out of range");
+  EXPECT_LAMMPS_ERROR(command("kspace_style kifmm"), "expected 1 argument");
+  command("kspace_style kifmm 1e-4");
+  EXPECT_LAMMPS_ERROR(command("kspace_modify kifmm kernel magnetic"), "unknown kernel 'magnetic'");
+  EXPECT_LAMMPS_ERROR(command("kspace_modify kifmm order 40"), "order 40 is out of range");
+}
+
+// ---------------------------------------------------------------- YAML references
+
+TEST_F(KSpaceKifmm, YamlReferenceCoulomb)
+{
+  check_force_reference(REFERENCE_DIR "/kifmm_coulomb_open.yaml");
+}
+
+TEST_F(KSpaceKifmm, YamlReferenceGravity)
+{
+  check_force_reference(REFERENCE_DIR "/kifmm_gravity_open.yaml");
+}
+
+}    // namespace

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 #include <omp.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <filesystem>

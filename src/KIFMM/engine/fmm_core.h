@@ -77,6 +77,8 @@ template <class K> class FmmEvaluator : public Evaluator {
     tree_.center(tree_.cells[c], ctr);
     box_surface(unit, ctr, tree_.half_width(tree_.cells[c].level), out);
   }
+  // X list of a small target leaf: direct P2P (cost n_src*n_trg) beats P2L (n_src*nsurf)
+  bool x_direct(int b) const { return tree_.cells[b].leaf() && (int) tree_.cells[b].n_trg() <= nsurf_; }
   void setup_operators(double &t_setup);
   void upward(bool);
   void m2l();
@@ -114,7 +116,7 @@ template <class K> void FmmEvaluator<K>::upward(bool)
   for (int l = tree_.depth; l >= 2; --l) {
     const OperatorSet &op = *ops_[l];
     const double inv_s = 1.0 / scale_[l];
-#pragma omp parallel
+#pragma omp parallel if (tree_.level_begin[l + 1] - tree_.level_begin[l] > 8)
     {
       SurfacePoints surf;
       std::vector<double> check(nsurf_), scratch(nsurf_);
@@ -151,7 +153,7 @@ template <class K> void FmmEvaluator<K>::m2l()
   for (int l = 2; l <= tree_.depth; ++l) {
     const int b0 = tree_.level_begin[l], b1 = tree_.level_begin[l + 1];
     hat.assign((std::size_t) (b1 - b0) * 2 * nf, 0.0);
-#pragma omp parallel
+#pragma omp parallel if (b1 - b0 > 4)
     {
       M2LTransform::Workspace ws(*fft_);
 #pragma omp for schedule(dynamic, 8)
@@ -161,7 +163,7 @@ template <class K> void FmmEvaluator<K>::m2l()
     const double *kern = ops_[l]->m2l_hat.data();
     const double s = scale_[l];
     const int p0 = tree_.level_begin[l - 1], p1 = tree_.level_begin[l];
-#pragma omp parallel
+#pragma omp parallel if (p1 - p0 > 1)
     {
       M2LTransform::Workspace ws(*fft_);
       std::vector<double> ybuf((std::size_t) 8 * 2 * nf);
@@ -211,7 +213,7 @@ template <class K> void FmmEvaluator<K>::p2l()
     SurfacePoints surf;
 #pragma omp for schedule(dynamic, 4)
     for (int b = 0; b < n; ++b) {
-      if (lists_.X.size(b) == 0) continue;
+      if (lists_.X.size(b) == 0 || x_direct(b)) continue;
       cell_surface(b, inner_, surf);
       double *chk = dcheck(b);
       for (const int *a = lists_.X.begin(b); a != lists_.X.end(b); ++a) {
@@ -231,7 +233,7 @@ template <class K> void FmmEvaluator<K>::downward()
   for (int l = 2; l <= tree_.depth; ++l) {
     const OperatorSet &op = *ops_[l];
     const double inv_s = 1.0 / scale_[l];
-#pragma omp parallel
+#pragma omp parallel if (tree_.level_begin[l + 1] - tree_.level_begin[l] > 8)
     {
       std::vector<double> scratch(nsurf_);
 #pragma omp for schedule(dynamic, 4)
@@ -286,7 +288,7 @@ template <class K> void FmmEvaluator<K>::leaf_pass(bool want_pot, bool want_grad
       const std::size_t t0i = B.trg_begin;
       for (const int *a = lists_.W.begin(b); a != lists_.W.end(b); ++a) {
         const Cell &A = cells[*a];
-        if (A.leaf() && (int) A.n_src() <= nsurf_) {
+        if ((int) A.n_src() <= nsurf_) {    // direct is cheaper than M2P (subtree sources are contiguous)
           const std::size_t s0 = A.src_begin;
           p2p_pg<K, false>(k_, want_pot, B.n_trg(), &tx_[t0i], &ty_[t0i], &tz_[t0i], A.n_src(), &sx_[s0], &sy_[s0],
                            &sz_[s0], &sq_[s0], &tp_[t0i], &tgx_[t0i], &tgy_[t0i], &tgz_[t0i]);
@@ -296,6 +298,20 @@ template <class K> void FmmEvaluator<K>::leaf_pass(bool want_pot, bool want_grad
                            surf.y.data(), surf.z.data(), up(*a), &tp_[t0i], &tgx_[t0i], &tgy_[t0i], &tgz_[t0i]);
         }
       }
+    }
+  }
+  // X entries of small target leaves, evaluated directly instead of P2L (see p2l())
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int li = 0; li < nleaf; ++li) {
+    const int b = tree_.leaves[li];
+    const Cell &B = cells[b];
+    if (B.n_trg() == 0 || !x_direct(b)) continue;
+    const std::size_t t0i = B.trg_begin;
+    for (const int *a = lists_.X.begin(b); a != lists_.X.end(b); ++a) {
+      const Cell &A = cells[*a];
+      const std::size_t s0 = A.src_begin;
+      p2p_pg<K, false>(k_, want_pot, B.n_trg(), &tx_[t0i], &ty_[t0i], &tz_[t0i], A.n_src(), &sx_[s0], &sy_[s0],
+                       &sz_[s0], &sq_[s0], &tp_[t0i], &tgx_[t0i], &tgy_[t0i], &tgz_[t0i]);
     }
   }
   double t2 = omp_get_wtime();

@@ -36,7 +36,7 @@ void build_interaction_lists(const Octree &tree, InteractionLists &lists)
 
   const int nlev = (int) tree.level_begin.size() - 1;
   for (int l = 1; l < nlev; ++l) {
-#pragma omp parallel for schedule(dynamic, 16)
+#pragma omp parallel for schedule(dynamic, 16) if (tree.level_begin[l + 1] - tree.level_begin[l] > 512)
     for (int b = tree.level_begin[l]; b < tree.level_begin[l + 1]; ++b) {
       const Cell &B = cells[b];
       const int p = B.parent;
@@ -69,7 +69,7 @@ void build_interaction_lists(const Octree &tree, InteractionLists &lists)
     }
   }
   // U and W for target leaves
-#pragma omp parallel for schedule(dynamic, 16)
+#pragma omp parallel for schedule(dynamic, 16) if (tree.leaves.size() > 512)
   for (int li = 0; li < (int) tree.leaves.size(); ++li) {
     const int b = tree.leaves[li];
     const Cell &B = cells[b];

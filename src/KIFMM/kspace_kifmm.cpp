@@ -1,5 +1,7 @@
 #include "kspace_kifmm.h"
 
+#include "fix_kifmm_stride.h"
+
 #include "atom.h"
 #include "comm.h"
 #include "domain.h"
@@ -109,6 +111,7 @@ void KSpaceKIFMM::init()
                kifmm_lammps::kernel_name(kset.kernel));
   }
 
+  stride = nullptr;    // fix kifmm/stride re-attaches in its init
   qqrd2e = force->qqrd2e;
   scale = 1.0;
   if (kset.kernel != LongRangeKernel::Gravity) qsum_qsq(0);
@@ -221,6 +224,19 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   energy = 0.0;
   for (double &v : virial) v = 0.0;
 
+  // fix kifmm/stride: on skipped steps it adds the held forces (or none) and reports the last
+  // energy/virial; EnergyOnly evaluates without adding forces; Evaluate stores the forces
+  using Stride = FixKIFMMStride::Action;
+  Stride action = Stride::Plain;
+  if (stride) {
+    action = stride->plan(eflag_global || vflag_global, eflag_atom || vflag_atom, vflag_global,
+                          energy, virial);
+    if (action == Stride::Skip) return;
+  }
+  const bool keep = action == Stride::Evaluate && stride->keeps_energy();
+  const bool apply = action != Stride::EnergyOnly;
+  const double fscale = stride ? stride->force_scale(action) : 1.0;
+
   // grow per-atom arrays if requested (as the KSPACE styles do)
   if (atom->nmax > maxeatom && eflag_atom) {
     maxeatom = atom->nmax;
@@ -247,7 +263,7 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   const std::size_t nsrc = source_strength().size();
   const double *sx = source_xyz().data(), *ss = source_strength().data();
 
-  const bool want_potential = eflag_global || eflag_atom;
+  const bool want_potential = eflag_global || eflag_atom || keep;
   pot.assign(want_potential ? n : 0, 0.0);
   grad.assign(3 * n, 0.0);
   if (nsrc > 0)
@@ -258,20 +274,27 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   const double cf = force_prefactor(), ce = energy_prefactor();
   double e_local = 0.0;
   double v_local[6] = {0, 0, 0, 0, 0, 0};
+  if (action == Stride::Evaluate) stride->begin_evaluation();
   for (std::size_t k = 0; k < n; ++k) {
     const int i = index[k];
     const double s = strength[k];
     const double fx = cf * s * grad[3 * k], fy = cf * s * grad[3 * k + 1],
                  fz = cf * s * grad[3 * k + 2];
-    f[i][0] += fx;
-    f[i][1] += fy;
-    f[i][2] += fz;
+    if (apply) {
+      f[i][0] += fscale * fx;
+      f[i][1] += fscale * fy;
+      f[i][2] += fscale * fz;
+    }
+    if (action == Stride::Evaluate) {
+      const double fk[3] = {fx, fy, fz};
+      stride->store(i, fk, &xyz[3 * k]);
+    }
     if (want_potential) {
       const double e = 0.5 * ce * s * pot[k];
       e_local += e;
       if (eflag_atom) eatom[i] += e;
     }
-    if (vflag_global) {
+    if (vflag_global || keep) {
       // open system: W_ab = sum_i x_ia F_ib (equal to the pairwise sum_{i<j} r_ij,a F_ij,b)
       const double *xi = &xyz[3 * k];
       v_local[0] += xi[0] * fx;
@@ -284,8 +307,9 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   }
   // kspace energy and virial are global values (LAMMPS's computes add them after their own
   // reduction over ranks), as in the KSPACE styles
-  if (eflag_global) MPI_Allreduce(&e_local, &energy, 1, MPI_DOUBLE, MPI_SUM, world);
-  if (vflag_global) MPI_Allreduce(v_local, virial, 6, MPI_DOUBLE, MPI_SUM, world);
+  if (eflag_global || keep) MPI_Allreduce(&e_local, &energy, 1, MPI_DOUBLE, MPI_SUM, world);
+  if (vflag_global || keep) MPI_Allreduce(v_local, virial, 6, MPI_DOUBLE, MPI_SUM, world);
+  if (action == Stride::Evaluate) stride->end_evaluation(energy, virial);
 
   if (vflag_atom && nsrc > 0) {
     double center[3] = {0, 0, 0};

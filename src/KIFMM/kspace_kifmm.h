@@ -54,6 +54,10 @@ class KSpaceKIFMM : public KSpace {
   void per_atom_virial(double prefactor, double center[3]);
   void check_error();
   void report_first_evaluation();
+
+  // fix kifmm/stride attaches itself at its init (after this init, which detaches it)
+  class FixKIFMMStride *stride = nullptr;
+  friend class FixKIFMMStride;
 };
 
 }    // namespace LAMMPS_NS

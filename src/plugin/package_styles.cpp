@@ -2,6 +2,7 @@
 
 #include "style_maps.h"
 
+#include "fix_kifmm_stride.h"
 #include "kspace_kifmm.h"
 
 #include "lammps.h"
@@ -16,6 +17,10 @@ namespace {
 void *make_kspace_kifmm(void *lmp)
 {
   return new KSpaceKIFMM(static_cast<LAMMPS *>(lmp));
+}
+void *make_fix_kifmm_stride(void *lmp, int narg, char **arg)
+{
+  return new FixKIFMMStride(static_cast<LAMMPS *>(lmp), narg, arg);
 }
 }    // namespace
 
@@ -38,6 +43,8 @@ const std::vector<lammpsplugin_t> &package_styles()
     };
     add("kspace", "kifmm", "long-range coulomb/gravity/yukawa by the kernel-independent FMM")
         .creator.v1 = &make_kspace_kifmm;
+    add("fix", "kifmm/stride", "long-range forces of kspace kifmm refreshed every N steps")
+        .creator.v2 = &make_fix_kifmm_stride;
     return v;
   }();
   return styles;

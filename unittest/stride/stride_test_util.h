@@ -1,0 +1,36 @@
+// Shared input of the fix kifmm/stride tests: a small cube of +-1 charges (125 atoms on a
+// slightly disordered simple cubic lattice, unit spacing) in a fixed open box.
+#pragma once
+
+#include <string>
+
+namespace stride_test {
+
+// `pair` is the pair style line(s); the caller adds fixes and runs.
+inline std::string charged_cube(const std::string &pair = "pair_style zero 1.0\npair_coeff * *",
+                                const std::string &velocity = "velocity all create 0.5 777 loop geom")
+{
+  return "units lj\n"
+         "atom_style charge\n"
+         "boundary f f f\n"
+         "atom_modify map array\n"
+         "region box block -6 10 -6 10 -6 10 units box\n"
+         "create_box 2 box\n"
+         "lattice sc 1.0\n"
+         "region inner block -0.5 4.5 -0.5 4.5 -0.5 4.5 units box\n"
+         "create_atoms 1 region inner\n"
+         "set type 1 type/fraction 2 0.5 12345\n"
+         "displace_atoms all random 0.1 0.1 0.1 4711 units box\n"
+         "mass * 1.0\n"
+         "set type 1 charge 1.0\n"
+         "set type 2 charge -1.0\n" +
+      velocity + "\n" + pair +
+      "\n"
+      "kspace_style kifmm 1e-6\n"
+      "fix nve all nve\n"
+      "timestep 0.002\n"
+      "thermo_style custom step pe ke etotal elong\n"
+      "thermo_modify norm no\n";
+}
+
+}    // namespace stride_test

@@ -1,5 +1,5 @@
-// Shared input of the fix kifmm/stride tests: a small cube of +-1 charges (125 atoms on a
-// slightly disordered simple cubic lattice, unit spacing) in a fixed open box.
+// Shared input of the fix kifmm/stride tests: a small cube of +-1 charges (125 atoms in rock-salt
+// order on a slightly disordered simple cubic lattice, unit spacing, net charge +1) in a fixed open box.
 #pragma once
 
 #include <string>
@@ -19,11 +19,10 @@ inline std::string charged_cube(const std::string &pair = "pair_style zero 1.0\n
          "lattice sc 1.0\n"
          "region inner block -0.5 4.5 -0.5 4.5 -0.5 4.5 units box\n"
          "create_atoms 1 region inner\n"
-         "set type 1 type/fraction 2 0.5 12345\n"
          "displace_atoms all random 0.1 0.1 0.1 4711 units box\n"
          "mass * 1.0\n"
-         "set type 1 charge 1.0\n"
-         "set type 2 charge -1.0\n" +
+         "variable q atom 2*(id%2)-1\n"    // rock salt order: x+y+z parity
+         "set group all charge v_q\n" +
       velocity + "\n" + pair +
       "\n"
       "kspace_style kifmm 1e-6\n"

@@ -7,6 +7,8 @@
 #include "atom.h"
 #include "lammps.h"
 #include "library.h"
+#include "modify.h"
+#include "fix.h"
 #include "update.h"
 
 #include <cmath>
@@ -107,7 +109,11 @@ TEST_F(Stride, HoldRepeatsTheLastForceAndReportsTheLastEnergy)
   EXPECT_TRUE(bitwise_equal(forces_by_id(), f0)) << "step 3 must feel the forces of step 0";
   EXPECT_EQ(thermo("elong"), e0) << "energy last";
   EXPECT_EQ(fv(2), 0.0) << "last evaluation step";
-  EXPECT_EQ(evaluate("f_st[1][5]"), f0.at(5)[0]) << "per-atom output: the cached force";
+  {
+    auto *fix = lmp->modify->fix[lmp->modify->find_fix("st")];
+    const int i = lmp->atom->map(5);
+    EXPECT_EQ(fix->array_atom[i][0], f0.at(5)[0]) << "per-atom output f_st[1]: the cached force";
+  }
   command("run 2 post no");
   EXPECT_EQ(fv(2), 5.0);
   EXPECT_GT(max_abs_diff(forces_by_id(), f0), 1e-6) << "step 5 is evaluated afresh";
@@ -155,8 +161,9 @@ TEST_F(Stride, PerAtomEnergyOnASkippedStepIsEvaluatedAndSumsToTheReportedEnergy)
 {
   commands(charged_cube());
   commands("fix st all kifmm/stride 5\ncompute pea all pe/atom kspace\n"
-           "compute sum all reduce sum c_pea\nthermo_style custom step elong c_sum\nrun 3 post no");
-  const double e = thermo("elong"), s = thermo("c_sum");
+           "compute sum all reduce sum c_pea\nthermo_style custom step elong c_sum\n"
+           "thermo_modify norm no\nrun 3 post no");
+  const double e = thermo("elong"), s = evaluate("c_sum");
   EXPECT_NEAR(s, e, 1e-12 * std::fabs(e));
   EXPECT_GE(fv(4), 1.0) << "the per-atom request forced an energy evaluation";
 }
@@ -232,7 +239,7 @@ TEST_F(Stride, CacheSurvivesSortDeletionAndInsertion)
   EXPECT_TRUE(bitwise_equal(forces_by_id(), f0));
 
   // deletion: the survivors keep their held forces (which still include the deleted charges)
-  commands("group gone id 1:20\ndelete_atoms group gone\nrun 2 post no");
+  commands("group gone id 1:20\ndelete_atoms group gone compress no\nrun 2 post no");
   auto f5 = forces_by_id();
   EXPECT_EQ(natoms(), 105);
   for (const auto &[id, f] : f5)
@@ -250,7 +257,7 @@ TEST_F(Stride, CacheSurvivesSortDeletionAndInsertion)
   auto f7 = forces_by_id();
   EXPECT_GT(std::fabs(f7.at(127)[1]), 0.01) << "the new charge feels the others";
   EXPECT_EQ(f7.at(126)[0], 0.0);
-  EXPECT_GT(max_abs_diff(f7, f0), 1e-6);
+  EXPECT_GT(std::fabs(f7.at(50)[0] - f0.at(50)[0]), 1e-6) << "the others were re-evaluated";
 }
 
 // ---------------------------------------------------------------- clumps
@@ -382,6 +389,7 @@ TEST_F(Stride, StiffnessOfTwoSeparatingChargesAndTheRecommendation)
     pair_style zero 1.0
     pair_coeff * *
     kspace_style kifmm 1e-10
+    fix nve all nve
     fix st all kifmm/stride 20 kdem 20.0
     timestep 0.01
   )");

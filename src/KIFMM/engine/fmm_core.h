@@ -149,56 +149,79 @@ template <class K> void FmmEvaluator<K>::m2l()
 {
   const auto &cells = tree_.cells;
   const int nf = fft_->nfreq();
-  std::vector<double> hat;
+  std::vector<double> xhat, yhat;
+  std::vector<const double *> xtab;
+  std::vector<double *> ytab;
+  std::vector<std::pair<int, int>> pairs[27];
   for (int l = 2; l <= tree_.depth; ++l) {
     const int b0 = tree_.level_begin[l], b1 = tree_.level_begin[l + 1];
-    hat.assign((std::size_t) (b1 - b0) * 2 * nf, 0.0);
-#pragma omp parallel if (b1 - b0 > 4)
+    const int p0 = tree_.level_begin[l - 1], p1 = tree_.level_begin[l];
+    // source cells (children of a target parent's colleague) and target cells (V non-empty)
+    std::vector<int> src_slot(b1 - b0, -1), trg_slot(b1 - b0, -1), sources, targets;
+    for (int b = b0; b < b1; ++b) {
+      if (lists_.V.size(b) == 0) continue;
+      trg_slot[b - b0] = (int) targets.size();
+      targets.push_back(b);
+      for (const int *a = lists_.V.begin(b); a != lists_.V.end(b); ++a)
+        if (src_slot[*a - b0] < 0) {
+          src_slot[*a - b0] = 0;
+          sources.push_back(*a);
+        }
+    }
+    if (targets.empty()) continue;
+    std::sort(sources.begin(), sources.end());
+    for (std::size_t i = 0; i < sources.size(); ++i) src_slot[sources[i] - b0] = (int) i;
+    const int nsrc = (int) sources.size(), ntrg = (int) targets.size();
+    const std::size_t xstride = (std::size_t) nsrc * 32, ystride = (std::size_t) ntrg * 32;
+    xhat.resize((std::size_t) nsrc * 2 * nf);
+    yhat.assign((std::size_t) ntrg * 2 * nf, 0.0);
+    // per parent: 8 child spectra (parents indexed from p0)
+    xtab.assign((std::size_t) (p1 - p0) * 8, nullptr);
+    ytab.assign((std::size_t) (p1 - p0) * 8, nullptr);
+    for (int c = b0; c < b1; ++c) {
+      const int par = cells[c].parent - p0;
+      int oct = 0;
+      while (cells[cells[c].parent].child[oct] != c) ++oct;
+      if (src_slot[c - b0] >= 0) xtab[(std::size_t) par * 8 + oct] = &xhat[(std::size_t) src_slot[c - b0] * 32];
+      if (trg_slot[c - b0] >= 0) ytab[(std::size_t) par * 8 + oct] = &yhat[(std::size_t) trg_slot[c - b0] * 32];
+    }
+    for (auto &v : pairs) v.clear();
+    for (int pc = p0; pc < p1; ++pc) {
+      const bool has_trg = [&] {
+        for (int o = 0; o < 8; ++o)
+          if (ytab[(std::size_t) (pc - p0) * 8 + o]) return true;
+        return false;
+      }();
+      if (!has_trg) continue;
+      const auto &col = lists_.colleagues[pc];
+      for (int sl = 0; sl < 27; ++sl) {
+        const int cc = col[sl];
+        if (sl == 13 || cc < 0 || cells[cc].leaf()) continue;
+        bool has_src = false;
+        for (int o = 0; o < 8; ++o) has_src = has_src || xtab[(std::size_t) (cc - p0) * 8 + o];
+        if (has_src) pairs[sl].emplace_back(pc - p0, cc - p0);
+      }
+    }
+#pragma omp parallel if (nsrc > 4)
     {
       M2LTransform::Workspace ws(*fft_);
 #pragma omp for schedule(dynamic, 8)
-      for (int c = b0; c < b1; ++c)
-        if (cells[c].n_src() > 0) fft_->forward(up(c), &hat[(std::size_t) (c - b0) * 2 * nf], ws);
+      for (int i = 0; i < nsrc; ++i) fft_->forward(up(sources[i]), &xhat[(std::size_t) i * 32], xstride, ws);
     }
     const double *kern = ops_[l]->m2l_hat.data();
+    const int nblocks = nf / 16;
+    const int per = std::max(1, std::min(4, nblocks / (4 * omp_get_max_threads())));
+#pragma omp parallel for schedule(dynamic, 1) if (ntrg > 8)
+    for (int bb = 0; bb < nblocks; bb += per)
+      m2l_parent_pairs(nf, kern, bb, std::min(nblocks, bb + per), pairs, xtab.data(), xstride, ytab.data(), ystride);
     const double s = scale_[l];
-    const int p0 = tree_.level_begin[l - 1], p1 = tree_.level_begin[l];
-#pragma omp parallel if (p1 - p0 > 1)
+#pragma omp parallel if (ntrg > 4)
     {
       M2LTransform::Workspace ws(*fft_);
-      std::vector<double> ybuf((std::size_t) 8 * 2 * nf);
-      std::vector<const double *> xg(27 * 8);
-      int slots[27];
-#pragma omp for schedule(dynamic, 1)
-      for (int pc = p0; pc < p1; ++pc) {
-        const Cell &P = cells[pc];
-        if (P.leaf() || P.n_trg() == 0) continue;
-        int ng = 0;
-        const auto &col = lists_.colleagues[pc];
-        for (int sl = 0; sl < 27; ++sl) {
-          const int cc = col[sl];
-          if (sl == 13 || cc < 0 || cells[cc].leaf() || cells[cc].n_src() == 0) continue;
-          slots[ng] = sl;
-          for (int oct = 0; oct < 8; ++oct) {
-            const int ch = cells[cc].child[oct];
-            xg[ng * 8 + oct] = (ch >= 0 && cells[ch].n_src() > 0) ? &hat[(std::size_t) (ch - b0) * 2 * nf] : nullptr;
-          }
-          ++ng;
-        }
-        if (ng == 0) continue;
-        double *y[8];
-        for (int oct = 0; oct < 8; ++oct) {
-          const int ch = P.child[oct];
-          y[oct] = (ch >= 0 && cells[ch].n_trg() > 0) ? &ybuf[(std::size_t) oct * 2 * nf] : nullptr;
-          if (y[oct]) std::fill(y[oct], y[oct] + 2 * nf, 0.0);
-        }
-        m2l_hadamard_parent(nf, kern, ng, slots, reinterpret_cast<const double *const(*)[8]>(xg.data()), y);
-        for (int oct = 0; oct < 8; ++oct) {
-          if (!y[oct]) continue;
-          const int ch = P.child[oct];
-          fft_->inverse_add(y[oct], dcheck(ch), s, ws);
-          has_local_[ch] = 1;
-        }
+#pragma omp for schedule(dynamic, 8)
+      for (int i = 0; i < ntrg; ++i) {
+        fft_->inverse_add(&yhat[(std::size_t) i * 32], ystride, dcheck(targets[i]), s, ws);
+        has_local_[targets[i]] = 1;
       }
     }
   }

@@ -4,6 +4,10 @@
 
 #include <fftw3.h>
 
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
+
 #include <algorithm>
 #include <cstring>
 #include <map>
@@ -49,6 +53,7 @@ void m2l_kernel_transforms(const UnitKernel &k, int p, std::vector<double> &hat,
 {
   const int n = m2l_grid_n(p);
   nfreq = m2l_nfreq(p);
+  const int nraw = m2l_nfreq_raw(p);
   hat.assign((std::size_t) kM2LKernels * 2 * nfreq, 0.0);
   const double dx = p > 1 ? 2.0 * kRadiusInner / (p - 1) : 0.0;
   const double norm = 1.0 / (double(n) * n * n);
@@ -58,7 +63,7 @@ void m2l_kernel_transforms(const UnitKernel &k, int p, std::vector<double> &hat,
   {
     std::lock_guard<std::mutex> lock(fftw_mutex());
     grid = fftw_alloc_real((std::size_t) n * n * n);
-    spec = fftw_alloc_complex(nfreq);
+    spec = fftw_alloc_complex(nraw);
     plan = fftw_plan_dft_r2c_3d(n, n, n, grid, spec, FFTW_ESTIMATE);
   }
   for (int ox = -3; ox <= 3; ++ox)
@@ -75,10 +80,10 @@ void m2l_kernel_transforms(const UnitKernel &k, int p, std::vector<double> &hat,
               grid[((std::size_t) gi * n + gj) * n + gl] = k.g(rx * rx + ry * ry + rz * rz);
             }
         fftw_execute_dft_r2c(plan, grid, spec);
-        double *re = hat.data() + (std::size_t) id * 2 * nfreq, *im = re + nfreq;
-        for (int f = 0; f < nfreq; ++f) {
-          re[f] = spec[f][0] * norm;
-          im[f] = spec[f][1] * norm;
+        for (int f = 0; f < nraw; ++f) {
+          double *chunk = hat.data() + ((std::size_t) (f / 16) * kM2LKernels + id) * 32;
+          chunk[f % 16] = spec[f][0] * norm;
+          chunk[16 + f % 16] = spec[f][1] * norm;
         }
       }
   std::lock_guard<std::mutex> lock(fftw_mutex());
@@ -87,7 +92,7 @@ void m2l_kernel_transforms(const UnitKernel &k, int p, std::vector<double> &hat,
   fftw_free(spec);
 }
 
-M2LTransform::M2LTransform(int p) : p_(p), n_(m2l_grid_n(p)), nfreq_(m2l_nfreq(p))
+M2LTransform::M2LTransform(int p) : p_(p), n_(m2l_grid_n(p)), nfreq_(m2l_nfreq(p)), nraw_(m2l_nfreq_raw(p))
 {
   const std::vector<int> lat = surface_lattice(p);
   surf2grid_.resize(lat.size() / 3);
@@ -99,7 +104,7 @@ M2LTransform::M2LTransform(int p) : p_(p), n_(m2l_grid_n(p)), nfreq_(m2l_nfreq(p
   auto it = plans.find(p);
   if (it == plans.end()) {
     double *g = fftw_alloc_real((std::size_t) n_ * n_ * n_);
-    fftw_complex *s = fftw_alloc_complex(nfreq_);
+    fftw_complex *s = fftw_alloc_complex(nraw_);
     fftw_plan f = fftw_plan_dft_r2c_3d(n_, n_, n_, g, s, FFTW_ESTIMATE);
     fftw_plan b = fftw_plan_dft_c2r_3d(n_, n_, n_, s, g, FFTW_ESTIMATE);
     fftw_free(g);
@@ -124,24 +129,27 @@ M2LTransform::Workspace::~Workspace()
   fftw_free(spec);
 }
 
-void M2LTransform::forward(const double *equiv, double *hat, Workspace &w) const
+void M2LTransform::forward(const double *equiv, double *hat, std::size_t stride, Workspace &w) const
 {
   std::memset(w.grid, 0, sizeof(double) * n_ * n_ * n_);
   for (std::size_t m = 0; m < surf2grid_.size(); ++m) w.grid[surf2grid_[m]] = equiv[m];
   fftw_execute_dft_r2c((fftw_plan) plan_fwd_, w.grid, (fftw_complex *) w.spec);
-  double *re = hat, *im = hat + nfreq_;
-  for (int f = 0; f < nfreq_; ++f) {
-    re[f] = w.spec[2 * f];
-    im[f] = w.spec[2 * f + 1];
+  for (int b = 0; b < nfreq_ / 16; ++b) {
+    double *chunk = hat + b * stride;
+    for (int j = 0; j < 16; ++j) {
+      const int f = 16 * b + j;
+      chunk[j] = f < nraw_ ? w.spec[2 * f] : 0.0;
+      chunk[16 + j] = f < nraw_ ? w.spec[2 * f + 1] : 0.0;
+    }
   }
 }
 
-void M2LTransform::inverse_add(const double *hat, double *check, double scale, Workspace &w) const
+void M2LTransform::inverse_add(const double *hat, std::size_t stride, double *check, double scale, Workspace &w) const
 {
-  const double *re = hat, *im = hat + nfreq_;
-  for (int f = 0; f < nfreq_; ++f) {
-    w.spec[2 * f] = re[f];
-    w.spec[2 * f + 1] = im[f];
+  for (int f = 0; f < nraw_; ++f) {
+    const double *chunk = hat + (f / 16) * stride;
+    w.spec[2 * f] = chunk[f % 16];
+    w.spec[2 * f + 1] = chunk[16 + f % 16];
   }
   fftw_execute_dft_c2r((fftw_plan) plan_bwd_, (fftw_complex *) w.spec, w.grid);
   for (std::size_t m = 0; m < surf2grid_.size(); ++m) check[m] += scale * w.grid[surf2grid_[m]];
@@ -169,33 +177,94 @@ const ChildOffsetTable &child_offsets()
   static ChildOffsetTable t;
   return t;
 }
+
+// y += k .* x over 16 frequencies at offset b (split re/im with stride nfreq)
+inline void cmac16(const double *k, const double *x, double *y)
+{
+#if defined(__AVX512F__)
+  const double *ki = k + 16, *xi = x + 16;
+  double *yi = y + 16;
+  const __m512d kr0 = _mm512_loadu_pd(k), kr1 = _mm512_loadu_pd(k + 8);
+  const __m512d ki0 = _mm512_loadu_pd(ki), ki1 = _mm512_loadu_pd(ki + 8);
+  const __m512d xr0 = _mm512_loadu_pd(x), xr1 = _mm512_loadu_pd(x + 8);
+  const __m512d xi0 = _mm512_loadu_pd(xi), xi1 = _mm512_loadu_pd(xi + 8);
+  __m512d yr0 = _mm512_loadu_pd(y), yr1 = _mm512_loadu_pd(y + 8);
+  __m512d yi0 = _mm512_loadu_pd(yi), yi1 = _mm512_loadu_pd(yi + 8);
+  yr0 = _mm512_fnmadd_pd(ki0, xi0, _mm512_fmadd_pd(kr0, xr0, yr0));
+  yr1 = _mm512_fnmadd_pd(ki1, xi1, _mm512_fmadd_pd(kr1, xr1, yr1));
+  yi0 = _mm512_fmadd_pd(ki0, xr0, _mm512_fmadd_pd(kr0, xi0, yi0));
+  yi1 = _mm512_fmadd_pd(ki1, xr1, _mm512_fmadd_pd(kr1, xi1, yi1));
+  _mm512_storeu_pd(y, yr0);
+  _mm512_storeu_pd(y + 8, yr1);
+  _mm512_storeu_pd(yi, yi0);
+  _mm512_storeu_pd(yi + 8, yi1);
+#else
+  const double *ki = k + 16, *xi = x + 16;
+  double *yi = y + 16;
+#pragma omp simd
+  for (int f = 0; f < 16; ++f) {
+    const double a = k[f], bb = ki[f], c = x[f], d = xi[f];
+    y[f] += a * c - bb * d;
+    yi[f] += a * d + bb * c;
+  }
+#endif
+}
 }    // namespace
 
-void m2l_hadamard_parent(int nfreq, const double *kernels, int n_groups, const int *group_slot,
-                         const double *const (*x)[8], double *const y[8])
+void m2l_parent_pairs(int nfreq, const double *kernels, int block_begin, int block_end,
+                      const std::vector<std::pair<int, int>> *pairs, const double *const *xtab,
+                      std::size_t xstride, double *const *ytab, std::size_t ystride)
 {
   const ChildOffsetTable &tab = child_offsets();
-  constexpr int kBlock = 64;
-  for (int f0 = 0; f0 < nfreq; f0 += kBlock) {
-    const int nb = std::min(kBlock, nfreq - f0);
-    for (int g = 0; g < n_groups; ++g) {
-      const int slot = group_slot[g];
-      for (int s = 0; s < 8; ++s) {
-        const double *xs = x[g][s];
-        if (!xs) continue;
-        const double *__restrict xr = xs + f0, *__restrict xi = xs + nfreq + f0;
+  (void) nfreq;
+  for (int blk = block_begin; blk < block_end; ++blk) {
+    const double *kb = kernels + (std::size_t) blk * kM2LKernels * 32;
+    const std::size_t xo = blk * xstride, yo = blk * ystride;
+    for (int slot = 0; slot < 27; ++slot) {
+      const auto &pl = pairs[slot];
+      if (pl.empty()) continue;
+      const double *kp[8][8];
+      for (int s = 0; s < 8; ++s)
         for (int t = 0; t < 8; ++t) {
-          const int kidx = tab.rel[slot][s][t];
-          if (kidx < 0 || !y[t]) continue;
-          const double *__restrict kr = kernels + (std::size_t) kidx * 2 * nfreq + f0;
-          const double *__restrict ki = kr + nfreq;
-          double *__restrict yr = y[t] + f0, *__restrict yi = y[t] + nfreq + f0;
-#pragma omp simd
-          for (int f = 0; f < nb; ++f) {
-            const double a = kr[f], b = ki[f], c = xr[f], d = xi[f];
-            yr[f] += a * c - b * d;
-            yi[f] += a * d + b * c;
+          const int id = tab.rel[slot][s][t];
+          kp[s][t] = id < 0 ? nullptr : kb + (std::size_t) id * 32;
+        }
+      for (const auto &pr : pl) {
+        double *const *y = ytab + 8 * (std::size_t) pr.first;
+        const double *const *x = xtab + 8 * (std::size_t) pr.second;
+        for (int t = 0; t < 8; ++t) {
+          if (!y[t]) continue;
+          double *yt = y[t] + yo;
+#if defined(__AVX512F__)
+          // accumulators stay in registers over the 8 sources; separate accumulators for
+          // the two product terms keep the FMA chains short
+          __m512d ar0 = _mm512_loadu_pd(yt), ar1 = _mm512_loadu_pd(yt + 8);
+          __m512d ai0 = _mm512_loadu_pd(yt + 16), ai1 = _mm512_loadu_pd(yt + 24);
+          __m512d br0 = _mm512_setzero_pd(), br1 = br0, bi0 = br0, bi1 = br0;
+          for (int s = 0; s < 8; ++s) {
+            if (!x[s] || !kp[s][t]) continue;
+            const double *k = kp[s][t], *xs = x[s] + xo;
+            const __m512d kr0 = _mm512_loadu_pd(k), kr1 = _mm512_loadu_pd(k + 8);
+            const __m512d ki0 = _mm512_loadu_pd(k + 16), ki1 = _mm512_loadu_pd(k + 24);
+            const __m512d xr0 = _mm512_loadu_pd(xs), xr1 = _mm512_loadu_pd(xs + 8);
+            const __m512d xi0 = _mm512_loadu_pd(xs + 16), xi1 = _mm512_loadu_pd(xs + 24);
+            ar0 = _mm512_fmadd_pd(kr0, xr0, ar0);
+            ar1 = _mm512_fmadd_pd(kr1, xr1, ar1);
+            br0 = _mm512_fnmadd_pd(ki0, xi0, br0);
+            br1 = _mm512_fnmadd_pd(ki1, xi1, br1);
+            ai0 = _mm512_fmadd_pd(kr0, xi0, ai0);
+            ai1 = _mm512_fmadd_pd(kr1, xi1, ai1);
+            bi0 = _mm512_fmadd_pd(ki0, xr0, bi0);
+            bi1 = _mm512_fmadd_pd(ki1, xr1, bi1);
           }
+          _mm512_storeu_pd(yt, _mm512_add_pd(ar0, br0));
+          _mm512_storeu_pd(yt + 8, _mm512_add_pd(ar1, br1));
+          _mm512_storeu_pd(yt + 16, _mm512_add_pd(ai0, bi0));
+          _mm512_storeu_pd(yt + 24, _mm512_add_pd(ai1, bi1));
+#else
+          for (int s = 0; s < 8; ++s)
+            if (x[s] && kp[s][t]) cmac16(kp[s][t], x[s] + xo, yt);
+#endif
         }
       }
     }
@@ -203,4 +272,3 @@ void m2l_hadamard_parent(int nfreq, const double *kernels, int n_groups, const i
 }
 
 }    // namespace kifmm
-

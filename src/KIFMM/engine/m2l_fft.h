@@ -9,24 +9,27 @@
 // space, and each target is transformed back once.
 //
 // Frequency data are split (re[nfreq], im[nfreq]) so the complex multiply-add vectorizes.
-// The products are blocked as in PVFMM/exafmm-t: for a target parent and each of its 26
-// colleagues, the 8 x 8 child-child interactions run over one frequency block at a time.
+// The products are blocked over frequencies (see m2l_accumulate).
 #pragma once
 
 #include "kernel_scaling.h"
 
+#include <utility>
 #include <vector>
 
 namespace kifmm {
 
 inline int m2l_grid_n(int p) { return 2 * p; }
-inline int m2l_nfreq(int p) { const int n = 2 * p; return n * n * (n / 2 + 1); }
+// Complex frequencies of the r2c transform, and the storage stride (padded to 16).
+inline int m2l_nfreq_raw(int p) { const int n = 2 * p; return n * n * (n / 2 + 1); }
+inline int m2l_nfreq(int p) { return (m2l_nfreq_raw(p) + 15) / 16 * 16; }
 constexpr int kM2LKernels = 316;
 
 // Compact index 0..315 of a non-adjacent offset d in [-3,3]^3, or -1 if adjacent/out of range.
 int m2l_offset_index(int dx, int dy, int dz);
 
-// Transforms of the 316 M2L kernels, each divided by n^3 (normalizes the inverse FFT).
+// Transforms of the 316 M2L kernels, each divided by n^3 (normalizes the inverse FFT), stored
+// block-major: chunk (b, kernel) of 32 doubles at ((b * 316) + kernel) * 32.
 void m2l_kernel_transforms(const UnitKernel &k, int p, std::vector<double> &hat, int &nfreq);
 
 // Per-order FFT machinery (plans are created once per process and order, thread-safe).
@@ -44,21 +47,28 @@ class M2LTransform {
     Workspace(const Workspace &) = delete;
     Workspace &operator=(const Workspace &) = delete;
   };
-  // equivalent density on the surface -> split spectrum (2*nfreq doubles)
-  void forward(const double *equiv, double *hat, Workspace &w) const;
-  // check potential on the surface += scale * inverse(hat)
-  void inverse_add(const double *hat, double *check, double scale, Workspace &w) const;
+  // Spectra are stored in 16-frequency chunks of 32 doubles (16 re, then 16 im); chunk b of
+  // a cell's spectrum is at hat + b * stride (block-major arrays over all cells of a level).
+  // equivalent density on the surface -> spectrum
+  void forward(const double *equiv, double *hat, std::size_t stride, Workspace &w) const;
+  // check potential on the surface += scale * inverse(spectrum)
+  void inverse_add(const double *hat, std::size_t stride, double *check, double scale, Workspace &w) const;
 
  private:
-  int p_, n_, nfreq_;
+  int p_, n_, nfreq_, nraw_;
   std::vector<int> surf2grid_;
   void *plan_fwd_, *plan_bwd_;
 };
 
-// For a target parent: y[t] (+)= sum over colleague groups g (slot o_g, 8 source children
-// x[g][s], null when absent) of K(d) .* x[g][s], d = child offset of t relative to s at the
-// child level. y[t] null: child absent or without targets. Blocked over frequencies.
-void m2l_hadamard_parent(int nfreq, const double *kernels, int n_groups, const int *group_slot,
-                         const double *const (*x)[8], double *const y[8]);
+// Blocked frequency-space products (PVFMM / exafmm-t style). pairs[slot] lists (target
+// parent, source parent) index pairs whose source parent is the target parent's colleague at
+// that slot; ytab/xtab hold 8 child spectra per parent (null: child absent, or without
+// targets / sources). For each 16-frequency block in [block_begin, block_end) and each slot,
+// the 8x8 child-child kernel block stays in L1 while all parent pairs of that slot are
+// processed: y[t] += K(t - s) .* x[s] for non-adjacent (t, s). Blocks are disjoint in y, so
+// threads can own blocks; the per-target order is fixed (deterministic).
+void m2l_parent_pairs(int nfreq, const double *kernels, int block_begin, int block_end,
+                      const std::vector<std::pair<int, int>> *pairs, const double *const *xtab,
+                      std::size_t xstride, double *const *ytab, std::size_t ystride);
 
 }    // namespace kifmm

@@ -20,7 +20,7 @@
 
 namespace kifmm {
 
-constexpr int kOperatorVersion = 1;    // bump when the operator layout or math changes
+constexpr int kOperatorVersion = 3;    // bump when the operator layout or math changes
 
 struct OperatorSet {
   int p = 0, nsurf = 0, rank = 0, nfreq = 0;
@@ -28,7 +28,7 @@ struct OperatorSet {
   std::vector<double> uc2e_a, uc2e_b;                // nsurf x rank, rank x nsurf (row-major)
   std::vector<double> dc2e_a, dc2e_b;
   std::array<std::vector<double>, 8> m2m, l2l;       // nsurf x nsurf (row-major)
-  std::vector<double> m2l_hat;                       // 316 kernels x (re[nfreq], im[nfreq])
+  std::vector<double> m2l_hat;                       // 316 kernel spectra, block-major (m2l_fft.h)
   std::size_t bytes() const;
 };
 

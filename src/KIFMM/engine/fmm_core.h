@@ -110,35 +110,66 @@ template <class K> void FmmEvaluator<K>::setup_operators(double &t_setup)
   if (!fft_ || fft_->p() != p_) fft_ = std::make_unique<M2LTransform>(p_);
 }
 
+// Cells of a level are processed in chunks of kBatch; within a chunk, operators act on many
+// vectors at once (GEMM): P2M pseudo-inverse on all leaf check potentials, M2M grouped by
+// child octant. Each chunk writes only its own cells.
 template <class K> void FmmEvaluator<K>::upward(bool)
 {
   const auto &cells = tree_.cells;
+  constexpr int kBatch = 32;
   for (int l = tree_.depth; l >= 2; --l) {
     const OperatorSet &op = *ops_[l];
     const double inv_s = 1.0 / scale_[l];
-#pragma omp parallel if (tree_.level_begin[l + 1] - tree_.level_begin[l] > 8)
+    std::vector<int> list;
+    for (int c = tree_.level_begin[l]; c < tree_.level_begin[l + 1]; ++c)
+      if (cells[c].n_src() > 0) list.push_back(c);
+    const int n = (int) list.size(), nchunks = (n + kBatch - 1) / kBatch;
+#pragma omp parallel if (nchunks > 1)
     {
       SurfacePoints surf;
-      std::vector<double> check(nsurf_), scratch(nsurf_);
-#pragma omp for schedule(dynamic, 4)
-      for (int c = tree_.level_begin[l]; c < tree_.level_begin[l + 1]; ++c) {
-        const Cell &C = cells[c];
-        if (C.n_src() == 0) continue;
-        double *eq = up(c);
-        if (C.leaf()) {
-          cell_surface(c, outer_, surf);
-          std::fill(check.begin(), check.end(), 0.0);
-          const std::size_t b = C.src_begin;
-          p2p<K, true, false, false>(k_, nsurf_, surf.x.data(), surf.y.data(), surf.z.data(), C.n_src(),
-                                     &sx_[b], &sy_[b], &sz_[b], &sq_[b], check.data(), nullptr, nullptr, nullptr);
-          apply_pinv(op.uc2e_a, op.uc2e_b, nsurf_, op.rank, check.data(), eq, inv_s, scratch.data());
-        } else {
-          std::fill(eq, eq + nsurf_, 0.0);
-          for (int oct = 0; oct < 8; ++oct) {
-            const int ch = C.child[oct];
-            if (ch < 0 || cells[ch].n_src() == 0) continue;
-            matvec(op.m2m[oct].data(), nsurf_, nsurf_, up(ch), eq, 1.0, true);
+      std::vector<double> chk, eq, xb;
+      std::vector<int> lv, nl, sel;
+#pragma omp for schedule(dynamic, 1)
+      for (int ch = 0; ch < nchunks; ++ch) {
+        lv.clear();
+        nl.clear();
+        for (int i = ch * kBatch; i < std::min(n, (ch + 1) * kBatch); ++i) (cells[list[i]].leaf() ? lv : nl).push_back(list[i]);
+        if (!lv.empty()) {    // P2M
+          chk.assign((std::size_t) nsurf_ * lv.size(), 0.0);
+          for (std::size_t j = 0; j < lv.size(); ++j) {
+            const Cell &C = cells[lv[j]];
+            cell_surface(lv[j], outer_, surf);
+            const std::size_t b = C.src_begin;
+            p2p<K, true, false, false>(k_, nsurf_, surf.x.data(), surf.y.data(), surf.z.data(), C.n_src(), &sx_[b],
+                                       &sy_[b], &sz_[b], &sq_[b], &chk[j * nsurf_], nullptr, nullptr, nullptr);
           }
+          eq.resize(chk.size());
+          apply_pinv_batch(op.uc2e_a, op.uc2e_b, nsurf_, op.rank, chk.data(), (int) lv.size(), eq.data(), inv_s);
+          for (std::size_t j = 0; j < lv.size(); ++j) std::copy(&eq[j * nsurf_], &eq[(j + 1) * nsurf_], up(lv[j]));
+        }
+        if (!nl.empty()) {    // M2M by octant
+          eq.assign((std::size_t) nsurf_ * nl.size(), 0.0);
+          for (int oct = 0; oct < 8; ++oct) {
+            sel.clear();
+            for (std::size_t j = 0; j < nl.size(); ++j) {
+              const int c = cells[nl[j]].child[oct];
+              if (c >= 0 && cells[c].n_src() > 0) sel.push_back((int) j);
+            }
+            if (sel.empty()) continue;
+            xb.resize((std::size_t) nsurf_ * sel.size());
+            for (std::size_t k = 0; k < sel.size(); ++k) {
+              const double *src = up(cells[nl[sel[k]]].child[oct]);
+              std::copy(src, src + nsurf_, &xb[k * nsurf_]);
+            }
+            chk.resize(xb.size());
+            matmat(op.m2m[oct].data(), nsurf_, nsurf_, xb.data(), (int) sel.size(), chk.data(), 1.0, false);
+            for (std::size_t k = 0; k < sel.size(); ++k) {
+              double *dst = &eq[sel[k] * nsurf_];
+              const double *y = &chk[k * nsurf_];
+              for (int i = 0; i < nsurf_; ++i) dst[i] += y[i];
+            }
+          }
+          for (std::size_t j = 0; j < nl.size(); ++j) std::copy(&eq[j * nsurf_], &eq[(j + 1) * nsurf_], up(nl[j]));
         }
       }
     }
@@ -253,24 +284,51 @@ template <class K> void FmmEvaluator<K>::p2l()
 template <class K> void FmmEvaluator<K>::downward()
 {
   const auto &cells = tree_.cells;
+  constexpr int kBatch = 32;
   for (int l = 2; l <= tree_.depth; ++l) {
     const OperatorSet &op = *ops_[l];
     const double inv_s = 1.0 / scale_[l];
-#pragma omp parallel if (tree_.level_begin[l + 1] - tree_.level_begin[l] > 8)
+    std::vector<int> list;
+    for (int c = tree_.level_begin[l]; c < tree_.level_begin[l + 1]; ++c) {
+      if (cells[c].n_trg() == 0) continue;
+      if (l > 2 && has_local_[cells[c].parent]) has_local_[c] = 1;
+      if (has_local_[c]) list.push_back(c);
+    }
+    const int n = (int) list.size(), nchunks = (n + kBatch - 1) / kBatch;
+#pragma omp parallel if (nchunks > 1)
     {
-      std::vector<double> scratch(nsurf_);
-#pragma omp for schedule(dynamic, 4)
-      for (int c = tree_.level_begin[l]; c < tree_.level_begin[l + 1]; ++c) {
-        const Cell &C = cells[c];
-        if (C.n_trg() == 0) continue;
-        const int pc = C.parent;
-        if (l > 2 && has_local_[pc]) {
-          int oct = 0;
-          while (cells[pc].child[oct] != c) ++oct;
-          matvec(ops_[l - 1]->l2l[oct].data(), nsurf_, nsurf_, dequiv(pc), dcheck(c), scale_[l - 1], true);
-          has_local_[c] = 1;
+      std::vector<double> chk, eq, xb, yb;
+      std::vector<int> sel;
+#pragma omp for schedule(dynamic, 1)
+      for (int ch = 0; ch < nchunks; ++ch) {
+        const int i0 = ch * kBatch, m = std::min(n, (ch + 1) * kBatch) - i0;
+        chk.resize((std::size_t) nsurf_ * m);
+        for (int j = 0; j < m; ++j) std::copy(dcheck(list[i0 + j]), dcheck(list[i0 + j]) + nsurf_, &chk[(std::size_t) j * nsurf_]);
+        if (l > 2) {    // L2L by octant, from the parents' downward equivalents
+          for (int oct = 0; oct < 8; ++oct) {
+            sel.clear();
+            for (int j = 0; j < m; ++j) {
+              const Cell &C = cells[list[i0 + j]];
+              if ((int) (C.prefix & 7) == oct && has_local_[C.parent]) sel.push_back(j);
+            }
+            if (sel.empty()) continue;
+            xb.resize((std::size_t) nsurf_ * sel.size());
+            for (std::size_t k = 0; k < sel.size(); ++k) {
+              const double *src = dequiv(cells[list[i0 + sel[k]]].parent);
+              std::copy(src, src + nsurf_, &xb[k * nsurf_]);
+            }
+            yb.resize(xb.size());
+            matmat(ops_[l - 1]->l2l[oct].data(), nsurf_, nsurf_, xb.data(), (int) sel.size(), yb.data(), scale_[l - 1], false);
+            for (std::size_t k = 0; k < sel.size(); ++k) {
+              double *dst = &chk[(std::size_t) sel[k] * nsurf_];
+              const double *y = &yb[k * nsurf_];
+              for (int i = 0; i < nsurf_; ++i) dst[i] += y[i];
+            }
+          }
         }
-        if (has_local_[c]) apply_pinv(op.dc2e_a, op.dc2e_b, nsurf_, op.rank, dcheck(c), dequiv(c), inv_s, scratch.data());
+        eq.resize(chk.size());
+        apply_pinv_batch(op.dc2e_a, op.dc2e_b, nsurf_, op.rank, chk.data(), m, eq.data(), inv_s);
+        for (int j = 0; j < m; ++j) std::copy(&eq[(std::size_t) j * nsurf_], &eq[(std::size_t) (j + 1) * nsurf_], dequiv(list[i0 + j]));
       }
     }
   }

@@ -36,6 +36,25 @@ void apply_pinv(const std::vector<double> &A, const std::vector<double> &B, int 
   matvec(A.data(), nsurf, rank, scratch, equiv, alpha, false);
 }
 
+void matmat(const double *M, int rows, int cols, const double *X, int m, double *Y, double alpha, bool accumulate)
+{
+  Eigen::Map<const RowMat> A(M, rows, cols);
+  Eigen::Map<const Eigen::MatrixXd> x(X, cols, m);
+  Eigen::Map<Eigen::MatrixXd> y(Y, rows, m);
+  if (accumulate) y.noalias() += alpha * (A * x);
+  else y.noalias() = alpha * (A * x);
+}
+
+void apply_pinv_batch(const std::vector<double> &A, const std::vector<double> &B, int nsurf, int rank,
+                      const double *check, int m, double *equiv, double alpha)
+{
+  Eigen::Map<const RowMat> a(A.data(), nsurf, rank), b(B.data(), rank, nsurf);
+  Eigen::Map<const Eigen::MatrixXd> c(check, nsurf, m);
+  Eigen::Map<Eigen::MatrixXd> e(equiv, nsurf, m);
+  const Eigen::MatrixXd tmp = b * c;
+  e.noalias() = alpha * (a * tmp);
+}
+
 namespace {
 
 RowMat kernel_matrix(const UnitKernel &k, const SurfacePoints &trg, const SurfacePoints &src)

@@ -44,4 +44,10 @@ void matvec(const double *M, int rows, int cols, const double *x, double *y, dou
 void apply_pinv(const std::vector<double> &A, const std::vector<double> &B, int nsurf, int rank,
                 const double *check, double *equiv, double alpha, double *scratch);
 
+// Batched forms on m column vectors stored contiguously (column-major rows x m):
+// Y (+)= alpha * M X, and EQ = alpha * A (B CHK).
+void matmat(const double *M, int rows, int cols, const double *X, int m, double *Y, double alpha, bool accumulate);
+void apply_pinv_batch(const std::vector<double> &A, const std::vector<double> &B, int nsurf, int rank,
+                      const double *check, int m, double *equiv, double alpha);
+
 }    // namespace kifmm

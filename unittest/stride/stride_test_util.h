@@ -1,5 +1,5 @@
-// Shared input of the fix kifmm/stride tests: a small cube of +-1 charges (125 atoms in rock-salt
-// order on a slightly disordered simple cubic lattice, unit spacing, net charge +1) in a fixed open box.
+// Shared input of the fix kifmm/stride tests: a small cube of +-1 charges (edge^3 atoms, default 125, in rock-salt
+// order on a slightly disordered simple cubic lattice, unit spacing, net charge +1 for odd edge) in a fixed open box.
 #pragma once
 
 #include <string>
@@ -7,9 +7,12 @@
 namespace stride_test {
 
 // `pair` is the pair style line(s); the caller adds fixes and runs.
+// `edge` atoms per edge (at most 10; 10: 1000 atoms, several octree leaves).
 inline std::string charged_cube(const std::string &pair = "pair_style zero 1.0\npair_coeff * *",
-                                const std::string &velocity = "velocity all create 0.5 777 loop geom")
+                                const std::string &velocity = "velocity all create 0.5 777 loop geom",
+                                int edge = 5)
 {
+  const std::string hi = std::to_string(edge - 0.5);
   return "units lj\n"
          "atom_style charge\n"
          "boundary f f f\n"
@@ -17,7 +20,7 @@ inline std::string charged_cube(const std::string &pair = "pair_style zero 1.0\n
          "region box block -6 10 -6 10 -6 10 units box\n"
          "create_box 2 box\n"
          "lattice sc 1.0\n"
-         "region inner block -0.5 4.5 -0.5 4.5 -0.5 4.5 units box\n"
+         "region inner block -0.5 " + hi + " -0.5 " + hi + " -0.5 " + hi + " units box\n"
          "create_atoms 1 region inner\n"
          "displace_atoms all random 0.1 0.1 0.1 4711 units box\n"
          "mass * 1.0\n"

@@ -73,7 +73,7 @@ TEST_P(NEqualsOne, IsBitForBitTheRunWithoutTheFix)
   const std::string soft = "pair_style soft 1.0\npair_coeff * * 20.0";
   auto trajectory = [&](const std::string &fix) {
     create();
-    commands(charged_cube(soft));
+    commands(charged_cube(soft, "velocity all create 0.5 777 loop geom", 10));    // 1000 atoms
     if (!fix.empty()) command(fix);
     commands("thermo 1\nrun 40 post no");
     return std::make_tuple(positions_by_id(), forces_by_id(), thermo("elong"), thermo("etotal"));
@@ -186,32 +186,38 @@ TEST_P(Restart, SplitRunContinuesTheScheduleExactly)
   const std::string soft = "pair_style soft 1.0\npair_coeff * * 20.0";
   const std::string fix = std::string("fix st all kifmm/stride 5 mode ") + GetParam();
   const std::string file = testing::TempDir() + "stride_" + GetParam() + ".restart";
+  // 1000 atoms: several octree leaves, so that the far field takes part. Equality is to
+  // roundoff: the setup of the second run rebuilds the neighbor lists and (with sorting) the
+  // atom order, which changes the order of the pair and FMM sums (differences ~1e-17 seen,
+  // none with 125 atoms); the control without the cached forces differs by > 1e-9.
+  const std::string in = charged_cube(soft, "velocity all create 0.5 777 loop geom", 10) +
+      "atom_modify sort 0 0.0\n";
   // unsplit
-  commands(charged_cube(soft));
+  commands(in);
   commands(fix + "\nrun 40 post no");
   const auto x_ref = positions_by_id();
   const double evals_ref = fv(3);
 
   // same instance, two runs
   create();
-  commands(charged_cube(soft));
+  commands(in);
   commands(fix + "\nrun 23 post no\nrun 17 post no");
-  EXPECT_TRUE(bitwise_equal(positions_by_id(), x_ref))
-      << "run 23 + run 17: " << max_abs_diff(positions_by_id(), x_ref);
+  EXPECT_LT(max_abs_diff(positions_by_id(), x_ref), 1e-13) << "run 23 + run 17";
 
   // through a restart file written at step 23 (not a multiple of 5)
   create();
-  commands(charged_cube(soft));
+  commands(in);
   commands(fix + "\nrun 23 post no\nwrite_restart " + file);
   auto restarted = [&](const std::string &fixline) {
     create();
     commands("read_restart " + file + "\n" + soft +
-             "\nkspace_style kifmm 1e-6\nfix nve all nve\nthermo_modify norm no\n" + fixline +
+             "\nkspace_style kifmm 1e-6\nfix nve all nve\nthermo_modify norm no\n"
+             "atom_modify sort 0 0.0\n" + fixline +
              "\nrun 17 post no");
     return positions_by_id();
   };
   const auto x_split = restarted(fix);
-  EXPECT_TRUE(bitwise_equal(x_split, x_ref)) << "restart: " << max_abs_diff(x_split, x_ref);
+  EXPECT_LT(max_abs_diff(x_split, x_ref), 1e-13) << "restart";
   EXPECT_EQ(fv(2), 40.0);
   if (std::string(GetParam()) == "hold")
     EXPECT_EQ(fv(3), evals_ref) << "no evaluation at the setup of step 23";

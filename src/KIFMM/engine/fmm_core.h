@@ -65,7 +65,7 @@ template <class K> class FmmEvaluator : public Evaluator {
   std::unique_ptr<M2LTransform> fft_;
   // sorted points (structure of arrays)
   std::vector<double> sx_, sy_, sz_, sq_, tx_, ty_, tz_, tp_, tgx_, tgy_, tgz_;
-  std::vector<double> up_equiv_, dn_check_, dn_equiv_;
+  std::vector<double> up_equiv_, dn_check_, dn_equiv_, xhat_, yhat_;
   std::vector<char> has_local_;
 
   double *up(int c) { return &up_equiv_[(std::size_t) c * nsurf_]; }
@@ -116,7 +116,7 @@ template <class K> void FmmEvaluator<K>::setup_operators(double &t_setup)
 template <class K> void FmmEvaluator<K>::upward(bool)
 {
   const auto &cells = tree_.cells;
-  constexpr int kBatch = 32;
+  constexpr int kBatch = 64;
   for (int l = tree_.depth; l >= 2; --l) {
     const OperatorSet &op = *ops_[l];
     const double inv_s = 1.0 / scale_[l];
@@ -180,7 +180,7 @@ template <class K> void FmmEvaluator<K>::m2l()
 {
   const auto &cells = tree_.cells;
   const int nf = fft_->nfreq();
-  std::vector<double> xhat, yhat;
+  std::vector<double> &xhat = xhat_, &yhat = yhat_;    // members: no page faults on reuse
   std::vector<const double *> xtab;
   std::vector<double *> ytab;
   std::vector<std::pair<int, int>> pairs[27];
@@ -284,7 +284,7 @@ template <class K> void FmmEvaluator<K>::p2l()
 template <class K> void FmmEvaluator<K>::downward()
 {
   const auto &cells = tree_.cells;
-  constexpr int kBatch = 32;
+  constexpr int kBatch = 64;
   for (int l = 2; l <= tree_.depth; ++l) {
     const OperatorSet &op = *ops_[l];
     const double inv_s = 1.0 / scale_[l];
@@ -341,18 +341,31 @@ template <class K> void FmmEvaluator<K>::leaf_pass(bool want_pot, bool want_grad
   const int nleaf = (int) tree_.leaves.size();
   std::vector<std::size_t> zeros(nleaf, 0);
   double t0 = omp_get_wtime();
-  // near field: U list
-#pragma omp parallel for schedule(dynamic, 1)
-  for (int li = 0; li < nleaf; ++li) {
-    const int b = tree_.leaves[li];
-    const Cell &B = cells[b];
-    if (B.n_trg() == 0) continue;
-    const std::size_t t0i = B.trg_begin;
-    for (const int *a = lists_.U.begin(b); a != lists_.U.end(b); ++a) {
-      const Cell &A = cells[*a];
-      const std::size_t s0 = A.src_begin;
-      p2p_pg<K, true>(k_, want_pot, B.n_trg(), &tx_[t0i], &ty_[t0i], &tz_[t0i], A.n_src(), &sx_[s0], &sy_[s0],
-                      &sz_[s0], &sq_[s0], &tp_[t0i], &tgx_[t0i], &tgy_[t0i], &tgz_[t0i], &zeros[li]);
+  // near field: U list; source ranges of U cells that are contiguous in the sorted source
+  // array are merged into one longer loop
+#pragma omp parallel
+  {
+    std::vector<std::pair<uint32_t, uint32_t>> ranges;
+#pragma omp for schedule(dynamic, 1)
+    for (int li = 0; li < nleaf; ++li) {
+      const int b = tree_.leaves[li];
+      const Cell &B = cells[b];
+      if (B.n_trg() == 0) continue;
+      ranges.clear();
+      for (const int *a = lists_.U.begin(b); a != lists_.U.end(b); ++a)
+        ranges.emplace_back(cells[*a].src_begin, cells[*a].src_end);
+      std::sort(ranges.begin(), ranges.end());
+      std::size_t nr = 0;
+      for (std::size_t i = 0; i < ranges.size(); ++i) {
+        if (nr > 0 && ranges[nr - 1].second == ranges[i].first) ranges[nr - 1].second = ranges[i].second;
+        else ranges[nr++] = ranges[i];
+      }
+      const std::size_t t0i = B.trg_begin;
+      for (std::size_t r = 0; r < nr; ++r) {
+        const std::size_t s0 = ranges[r].first, ns = ranges[r].second - ranges[r].first;
+        p2p_pg<K, true>(k_, want_pot, B.n_trg(), &tx_[t0i], &ty_[t0i], &tz_[t0i], ns, &sx_[s0], &sy_[s0], &sz_[s0],
+                        &sq_[s0], &tp_[t0i], &tgx_[t0i], &tgy_[t0i], &tgz_[t0i], &zeros[li]);
+      }
     }
   }
   double t1 = omp_get_wtime();
@@ -532,7 +545,8 @@ void FmmEvaluator<K>::evaluate(std::size_t n_src, const double *src_xyz, const d
   // self pairs (same arrays) are not coincident pairs
   if (src_xyz == trg_xyz && n_src == n_trg && stats_.coincident_pairs >= ns) stats_.coincident_pairs -= ns;
   stats_.tree_bytes = tree_.bytes() + lists_.bytes() +
-      sizeof(double) * (up_equiv_.size() + dn_check_.size() + dn_equiv_.size() + sx_.size() * 4 + tx_.size() * 7);
+      sizeof(double) * (up_equiv_.size() + dn_check_.size() + dn_equiv_.size() + xhat_.capacity() + yhat_.capacity() +
+                        sx_.size() * 4 + tx_.size() * 7);
 }
 
 }    // namespace kifmm

@@ -1,0 +1,711 @@
+// bench_solvers: one step of the speed-versus-error comparison of long-range solvers
+// (kspace kifmm, LAMMPS msm, direct summation; ewald/pppm for periodic cases) on the same
+// atoms, in an in-process LAMMPS instance. Driven by run_bench.py (see run.sh, README.md).
+//
+//   bench_solvers gen --config NAME --n N --seed S --out FILE.data [--mol FILE.mol] [--a A]
+//       writes a configuration as an atom_style charge data file (unit box) and prints a JSON
+//       line with its metadata (atom count, clump size for clump configurations)
+//   bench_solvers ref --data FILE.data --out FILE.ref [--sample S] [--atom-style STYLE]
+//                     [--periodic ACC]
+//       exact forces: kifmm::direct_sum over all sources on all atoms, or on a random sample of
+//       S atoms (whole clumps with --clump K); periodic: LAMMPS ewald at accuracy ACC
+//   bench_solvers run --data FILE.data --ref FILE.ref --solver SPEC [--repeats R]
+//                     [--min-time T] [--clump K] [--atom-style STYLE] [--periodic]
+//       one solver: setup (`run 0`), then R timed force evaluations (pair->compute +
+//       kspace->compute, forces only), the error of the last evaluation's total forces
+//       against the reference, peak memory; prints one line "RESULT {json}"
+//
+// Solver SPEC (colon-separated key=value after the name):
+//   kifmm:acc=1e-5 | kifmm:order=12[:leaf=M][:cache=none]
+//   msm:acc=A:cut=C[:order=O]    pair coul/msm with cutoff C * (mean atom spacing),
+//                                 kspace msm accuracy A * F_rms (LAMMPS's accuracy is absolute:
+//                                 A is then the requested error relative to the RMS force)
+//   direct                        kifmm::direct_sum on all atoms (O(N^2), exact)
+//   coulcut                       pair coul/cut with a cutoff beyond the box (LAMMPS's O(N^2))
+//   ewald:acc=A  pppm:acc=A:cut=C (periodic only; pair coul/long C * spacing)
+// All units are LAMMPS lj (qqrd2e = 1), dielectric 1, serial (1 MPI rank).
+#include "configurations.h"
+#include "kifmm.h"
+#include "kspace_kifmm.h"
+#include "package_styles.h"
+
+#include "atom.h"
+#include "comm.h"
+#include "domain.h"
+#include "force.h"
+#include "input.h"
+#include "kspace.h"
+#include "lammps.h"
+#include "pair.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <mpi.h>
+#include <omp.h>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+using namespace LAMMPS_NS;
+
+namespace {
+
+using Args = std::map<std::string, std::string>;
+
+Args parse_args(int argc, char **argv, int first)
+{
+  Args a;
+  for (int i = first; i < argc; ++i) {
+    std::string k = argv[i];
+    if (k.rfind("--", 0) != 0) throw std::runtime_error("unexpected argument " + k);
+    k = k.substr(2);
+    if (i + 1 < argc && std::string(argv[i + 1]).rfind("--", 0) != 0)
+      a[k] = argv[++i];
+    else
+      a[k] = "1";
+  }
+  return a;
+}
+
+std::string get(const Args &a, const std::string &k, const std::string &def = "")
+{
+  auto it = a.find(k);
+  if (it != a.end()) return it->second;
+  if (def.empty()) throw std::runtime_error("missing --" + k);
+  return def;
+}
+
+double wall()
+{
+  return MPI_Wtime();
+}
+
+// --------------------------------------------------------------------------- memory
+
+long status_kb(const char *key)
+{
+  std::ifstream in("/proc/self/status");
+  std::string line;
+  const size_t n = strlen(key);
+  while (std::getline(in, line))
+    if (line.compare(0, n, key) == 0) return std::atol(line.c_str() + n + 1);
+  return -1;
+}
+
+// Resets VmHWM to the current RSS (Linux >= 4.0); returns false where unsupported.
+bool reset_peak_rss()
+{
+  FILE *fp = fopen("/proc/self/clear_refs", "w");
+  if (!fp) return false;
+  bool ok = fputs("5", fp) >= 0;
+  ok = (fclose(fp) == 0) && ok;
+  return ok;
+}
+
+double load_average()
+{
+  double l = -1;
+  FILE *fp = fopen("/proc/loadavg", "r");
+  if (fp) {
+    if (fscanf(fp, "%lf", &l) != 1) l = -1;
+    fclose(fp);
+  }
+  return l;
+}
+
+// --------------------------------------------------------------------------- configurations
+
+struct Pebble {
+  std::array<double, 3> x;
+  double q;
+};
+
+// Coords and Charges of a LAMMPS molecule file (as tools/clump_shapes.py writes them).
+std::vector<Pebble> read_molecule(const std::string &path)
+{
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read molecule file " + path);
+  std::vector<std::string> lines;
+  std::string line;
+  while (std::getline(in, line)) {
+    auto h = line.find('#');
+    if (h != std::string::npos) line.resize(h);
+    lines.push_back(line);
+  }
+  int natoms = -1;
+  std::vector<Pebble> p;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    std::istringstream ls(lines[i]);
+    std::string w1, w2;
+    ls >> w1 >> w2;
+    if (w2 == "atoms" && natoms < 0) {
+      natoms = std::stoi(w1);
+      p.assign(natoms, Pebble{{0, 0, 0}, 0.0});
+    } else if ((w1 == "Coords" || w1 == "Charges") && w2.empty() && natoms > 0) {
+      int got = 0;
+      for (size_t j = i + 1; j < lines.size() && got < natoms; ++j) {
+        std::istringstream rs(lines[j]);
+        int id;
+        if (!(rs >> id)) continue;
+        if (id < 1 || id > natoms) throw std::runtime_error("bad atom id in " + path);
+        if (w1 == "Coords")
+          rs >> p[id - 1].x[0] >> p[id - 1].x[1] >> p[id - 1].x[2];
+        else
+          rs >> p[id - 1].q;
+        ++got;
+      }
+    }
+  }
+  if (natoms <= 0) throw std::runtime_error("no atoms in " + path);
+  return p;
+}
+
+// nclumps copies of a molecule at random positions and orientations in [0,1]^3 without
+// overlap of their bounding spheres (random sequential addition), uniformly scaled down so
+// that the bounding spheres fill at most 20% of the volume.
+kifmm_test::Configuration clumps(const std::vector<Pebble> &mol, int nclumps, unsigned seed,
+                                 double pebble_radius, double *scale_out)
+{
+  double R = 0;
+  std::array<double, 3> c{0, 0, 0};
+  for (auto &p : mol)
+    for (int d = 0; d < 3; ++d) c[d] += p.x[d] / mol.size();
+  for (auto &p : mol) {
+    double r2 = 0;
+    for (int d = 0; d < 3; ++d) r2 += (p.x[d] - c[d]) * (p.x[d] - c[d]);
+    R = std::max(R, std::sqrt(r2));
+  }
+  R += pebble_radius;
+  const double margin = 0.02, side = 1.0 - 2 * margin;
+  const double phi1 = nclumps * 4.0 / 3.0 * M_PI * R * R * R / (side * side * side);
+  const double scale = std::min(1.0, std::cbrt(0.2 / phi1));
+  const double Rs = R * scale;
+  if (scale_out) *scale_out = scale;
+
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> g(0.0, 1.0);
+  // cell hash of accepted centres, cell >= 2 Rs
+  const int nc = std::max(1, std::min(200, (int) std::floor(side / (2 * Rs))));
+  const double h = side / nc;
+  std::vector<std::vector<int>> cells((size_t) nc * nc * nc);
+  std::vector<std::array<double, 3>> centres;
+  auto cell_of = [&](double v) { return std::min(nc - 1, std::max(0, (int) ((v - margin - Rs) / h))); };
+  kifmm_test::Configuration conf;
+  int tries = 0;
+  while ((int) centres.size() < nclumps) {
+    if (++tries > 200 * nclumps) throw std::runtime_error("clumps: cannot place all clumps");
+    std::array<double, 3> ctr;
+    for (int d = 0; d < 3; ++d) ctr[d] = margin + Rs + (side - 2 * Rs) * u(rng);
+    int ci[3] = {cell_of(ctr[0]), cell_of(ctr[1]), cell_of(ctr[2])};
+    bool ok = true;
+    for (int dx = -1; dx <= 1 && ok; ++dx)
+      for (int dy = -1; dy <= 1 && ok; ++dy)
+        for (int dz = -1; dz <= 1 && ok; ++dz) {
+          int a = ci[0] + dx, b = ci[1] + dy, e = ci[2] + dz;
+          if (a < 0 || b < 0 || e < 0 || a >= nc || b >= nc || e >= nc) continue;
+          for (int k : cells[((size_t) a * nc + b) * nc + e]) {
+            double r2 = 0;
+            for (int d = 0; d < 3; ++d) r2 += (centres[k][d] - ctr[d]) * (centres[k][d] - ctr[d]);
+            if (r2 < 4 * Rs * Rs) {
+              ok = false;
+              break;
+            }
+          }
+        }
+    if (!ok) continue;
+    cells[((size_t) ci[0] * nc + ci[1]) * nc + ci[2]].push_back((int) centres.size());
+    centres.push_back(ctr);
+    // random rotation from a uniform unit quaternion
+    double qw = g(rng), qx = g(rng), qy = g(rng), qz = g(rng);
+    double qn = std::sqrt(qw * qw + qx * qx + qy * qy + qz * qz);
+    qw /= qn, qx /= qn, qy /= qn, qz /= qn;
+    const double Rm[3][3] = {
+        {1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)},
+        {2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw)},
+        {2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy)}};
+    for (auto &p : mol) {
+      std::array<double, 3> r, x;
+      for (int d = 0; d < 3; ++d) r[d] = (p.x[d] - c[d]) * scale;
+      for (int d = 0; d < 3; ++d)
+        x[d] = ctr[d] + Rm[d][0] * r[0] + Rm[d][1] * r[1] + Rm[d][2] * r[2];
+      conf.x.push_back(x);
+      conf.q.push_back(p.q);
+    }
+  }
+  return conf;
+}
+
+int cmd_gen(const Args &a)
+{
+  const std::string name = get(a, "config");
+  const int n = std::stoi(get(a, "n"));
+  const unsigned seed = (unsigned) std::stoul(get(a, "seed", "1"));
+  kifmm_test::Configuration c;
+  int clump = 1;
+  double scale = 1.0;
+  if (name == "uniform")
+    c = kifmm_test::uniform_cube(n, seed);
+  else if (name == "plummer")
+    c = kifmm_test::plummer(n, seed, std::stod(get(a, "a", "0.05")));
+  else if (name == "clusters")
+    c = kifmm_test::two_clusters(n, seed);
+  else if (name == "dipoles")
+    c = kifmm_test::dipoles(n, seed);
+  else if (name == "clumps") {
+    auto mol = read_molecule(get(a, "mol"));
+    clump = (int) mol.size();
+    const int nclumps = std::max(1, (int) std::lround((double) n / clump));
+    c = clumps(mol, nclumps, seed, std::stod(get(a, "pebble-radius", "0.005")), &scale);
+  } else
+    throw std::runtime_error("unknown configuration " + name);
+  kifmm_test::write_charge_data(get(a, "out"), c);
+  double qnet = 0;
+  for (double q : c.q) qnet += q;
+  printf("RESULT {\"natoms\": %zu, \"clump\": %d, \"clump_scale\": %.6g, \"net_charge\": %.6g}\n",
+         c.x.size(), clump, scale, qnet);
+  return 0;
+}
+
+// --------------------------------------------------------------------------- LAMMPS
+
+// LAMMPS's screen output goes to `screen` ("none": nowhere; LAMMPS errors end the process,
+// so the driver keeps it in a file that run_bench.py shows when a run fails)
+LAMMPS *open_lammps(const std::string &screen)
+{
+  std::vector<std::string> args = {"bench_solvers", "-log", "none", "-nocite", "-screen", screen};
+  std::vector<char *> argv;
+  for (auto &s : args) argv.push_back(const_cast<char *>(s.c_str()));
+  argv.push_back(nullptr);
+  auto *lmp = new LAMMPS((int) argv.size() - 1, argv.data(), MPI_COMM_WORLD);
+  kifmm_lammps::add_package_styles(lmp);
+  return lmp;
+}
+
+void commands(LAMMPS *lmp, const std::string &lines)
+{
+  std::istringstream in(lines);
+  std::string line;
+  while (std::getline(in, line))
+    if (line.find_first_not_of(" \t") != std::string::npos) lmp->input->one(line);
+}
+
+void load(LAMMPS *lmp, const Args &a, bool periodic)
+{
+  commands(lmp, "units lj\natom_style " + get(a, "atom-style", "charge") + "\nboundary " +
+               (periodic ? "p p p" : "f f f") + "\natom_modify map array\nread_data " +
+               get(a, "data") + "\nthermo_style custom step pe\nthermo_modify norm no\n");
+}
+
+// per-tag arrays (index = tag - 1; tags without an atom stay NaN / 0)
+struct AtomsByTag {
+  std::vector<double> x, q, f;
+  int maxtag = 0;
+};
+
+AtomsByTag gather(LAMMPS *lmp)
+{
+  Atom *atom = lmp->atom;
+  AtomsByTag g;
+  for (int i = 0; i < atom->nlocal; ++i) g.maxtag = std::max(g.maxtag, (int) atom->tag[i]);
+  g.x.assign(3 * (size_t) g.maxtag, NAN);
+  g.f.assign(3 * (size_t) g.maxtag, NAN);
+  g.q.assign(g.maxtag, 0.0);
+  for (int i = 0; i < atom->nlocal; ++i) {
+    const int t = (int) atom->tag[i] - 1;
+    for (int d = 0; d < 3; ++d) {
+      g.x[3 * t + d] = atom->x[i][d];
+      g.f[3 * t + d] = atom->f[i][d];
+    }
+    g.q[t] = atom->q ? atom->q[i] : 0.0;
+  }
+  return g;
+}
+
+double mean_spacing(LAMMPS *lmp)
+{
+  const double *lo = lmp->domain->boxlo, *hi = lmp->domain->boxhi;
+  const double vol = (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
+  return std::cbrt(vol / (double) lmp->atom->natoms);
+}
+
+// --------------------------------------------------------------------------- reference
+
+struct Reference {
+  int maxtag = 0;
+  double f_rms = 0;    // RMS of |F| over the sampled atoms
+  std::vector<double> f;    // 3 per tag, NaN where not sampled
+};
+
+void write_reference(const std::string &path, const Reference &r)
+{
+  FILE *fp = fopen(path.c_str(), "wb");
+  if (!fp) throw std::runtime_error("cannot write " + path);
+  const char magic[8] = {'K', 'F', 'M', 'M', 'R', 'E', 'F', '1'};
+  fwrite(magic, 1, 8, fp);
+  fwrite(&r.maxtag, sizeof(int), 1, fp);
+  fwrite(&r.f_rms, sizeof(double), 1, fp);
+  fwrite(r.f.data(), sizeof(double), r.f.size(), fp);
+  if (fclose(fp) != 0) throw std::runtime_error("cannot write " + path);
+}
+
+Reference read_reference(const std::string &path)
+{
+  FILE *fp = fopen(path.c_str(), "rb");
+  if (!fp) throw std::runtime_error("cannot read " + path);
+  char magic[8];
+  Reference r;
+  bool ok = fread(magic, 1, 8, fp) == 8 && memcmp(magic, "KFMMREF1", 8) == 0 &&
+      fread(&r.maxtag, sizeof(int), 1, fp) == 1 && fread(&r.f_rms, sizeof(double), 1, fp) == 1;
+  if (ok) {
+    r.f.resize(3 * (size_t) r.maxtag);
+    ok = fread(r.f.data(), sizeof(double), r.f.size(), fp) == r.f.size();
+  }
+  fclose(fp);
+  if (!ok) throw std::runtime_error("bad reference file " + path);
+  return r;
+}
+
+int cmd_ref(const Args &a)
+{
+  const bool periodic = a.count("periodic") > 0;
+  LAMMPS *lmp = open_lammps(get(a, "screen", "none"));
+  load(lmp, a, periodic);
+  Reference ref;
+  double t0 = wall(), t_exact = 0;
+  size_t nsample = 0;
+  if (periodic) {
+    // exact periodic reference: ewald at a tight accuracy with a real-space cutoff of a few
+    // spacings (LAMMPS chooses g_ewald and the k-space vectors)
+    const double cut = 3.0 * mean_spacing(lmp);
+    commands(lmp, "pair_style coul/long " + std::to_string(cut) +
+                 "\npair_coeff * *\npair_modify table 0\nkspace_style ewald " +
+                 get(a, "periodic") + "\nneigh_modify one 100000 page 1000000\nrun 0 post no\n");
+    AtomsByTag g = gather(lmp);
+    ref.maxtag = g.maxtag;
+    ref.f = g.f;
+    nsample = lmp->atom->natoms;
+  } else {
+    AtomsByTag g = gather(lmp);
+    ref.maxtag = g.maxtag;
+    ref.f.assign(3 * (size_t) g.maxtag, NAN);
+    // sources: all charged atoms; targets: all atoms or a random sample (whole clumps)
+    std::vector<double> sx, sq;
+    for (int t = 0; t < g.maxtag; ++t)
+      if (std::isfinite(g.x[3 * t]) && g.q[t] != 0.0) {
+        sx.insert(sx.end(), {g.x[3 * t], g.x[3 * t + 1], g.x[3 * t + 2]});
+        sq.push_back(g.q[t]);
+      }
+    const int clump = std::stoi(get(a, "clump", "1"));
+    const long want = std::stol(get(a, "sample", "0"));
+    std::vector<int> targets;
+    if (want <= 0 || want >= g.maxtag) {
+      for (int t = 0; t < g.maxtag; ++t)
+        if (std::isfinite(g.x[3 * t])) targets.push_back(t);
+    } else {
+      std::mt19937_64 rng(std::stoul(get(a, "seed", "99")));
+      const int nclumps = (g.maxtag + clump - 1) / clump;
+      std::vector<int> order(nclumps);
+      for (int k = 0; k < nclumps; ++k) order[k] = k;
+      std::shuffle(order.begin(), order.end(), rng);
+      for (int k = 0; k < nclumps && (long) targets.size() < want; ++k)
+        for (int t = order[k] * clump; t < std::min(g.maxtag, (order[k] + 1) * clump); ++t)
+          if (std::isfinite(g.x[3 * t])) targets.push_back(t);
+      std::sort(targets.begin(), targets.end());
+    }
+    std::vector<double> tx, grad(3 * targets.size());
+    for (int t : targets) tx.insert(tx.end(), {g.x[3 * t], g.x[3 * t + 1], g.x[3 * t + 2]});
+    kifmm::KernelSpec k;
+    const double te = wall();
+    kifmm::direct_sum(k, sq.size(), sx.data(), sq.data(), targets.size(), tx.data(), nullptr,
+                      grad.data());
+    t_exact = wall() - te;
+    const double qqrd2e = lmp->force->qqr2e / lmp->force->dielectric;
+    for (size_t k2 = 0; k2 < targets.size(); ++k2)
+      for (int d = 0; d < 3; ++d)
+        ref.f[3 * targets[k2] + d] = -qqrd2e * g.q[targets[k2]] * grad[3 * k2 + d];
+    nsample = targets.size();
+  }
+  double s2 = 0;
+  size_t cnt = 0;
+  for (int t = 0; t < ref.maxtag; ++t)
+    if (std::isfinite(ref.f[3 * t])) {
+      s2 += ref.f[3 * t] * ref.f[3 * t] + ref.f[3 * t + 1] * ref.f[3 * t + 1] +
+          ref.f[3 * t + 2] * ref.f[3 * t + 2];
+      ++cnt;
+    }
+  ref.f_rms = cnt ? std::sqrt(s2 / cnt) : 0.0;
+  write_reference(get(a, "out"), ref);
+  printf("RESULT {\"natoms\": %lld, \"sampled\": %zu, \"f_rms\": %.6g, \"time\": %.4g, "
+         "\"time_direct_sum\": %.4g, \"omp_threads\": %d}\n",
+         (long long) lmp->atom->natoms, nsample, ref.f_rms, wall() - t0, t_exact,
+         omp_get_max_threads());
+  delete lmp;
+  return 0;
+}
+
+// --------------------------------------------------------------------------- run
+
+struct Spec {
+  std::string name;
+  std::map<std::string, std::string> kv;
+  double num(const std::string &k, double def) const
+  {
+    auto it = kv.find(k);
+    return it == kv.end() ? def : std::stod(it->second);
+  }
+  bool has(const std::string &k) const { return kv.count(k) > 0; }
+};
+
+Spec parse_spec(const std::string &s)
+{
+  Spec sp;
+  std::stringstream ss(s);
+  std::string item;
+  std::getline(ss, sp.name, ':');
+  while (std::getline(ss, item, ':')) {
+    auto eq = item.find('=');
+    if (eq == std::string::npos) throw std::runtime_error("bad solver option " + item);
+    sp.kv[item.substr(0, eq)] = item.substr(eq + 1);
+  }
+  return sp;
+}
+
+std::string fmtd(double v)
+{
+  char b[64];
+  snprintf(b, sizeof b, "%.10g", v);
+  return b;
+}
+
+double median(std::vector<double> v)
+{
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n == 0 ? NAN : (n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]));
+}
+
+int cmd_run(const Args &a)
+{
+  const bool periodic = a.count("periodic") > 0;
+  const Spec sp = parse_spec(get(a, "solver"));
+  const int min_repeats = std::stoi(get(a, "repeats", "3"));
+  const double min_time = std::stod(get(a, "min-time", "1.0"));
+  const int clump = std::stoi(get(a, "clump", "1"));
+  // the reference's RMS force only (the forces are read after the memory measurement)
+  double f_rms = 0;
+  {
+    Reference head = read_reference(get(a, "ref"));
+    f_rms = head.f_rms;
+  }
+
+  LAMMPS *lmp = open_lammps(get(a, "screen", "none"));
+  load(lmp, a, periodic);
+  const double spacing = mean_spacing(lmp);
+  const long rss0 = status_kb("VmRSS:");
+  const bool hwm_reset = reset_peak_rss();
+  const double load0 = load_average();
+
+  std::string extra;    // solver parameters for the JSON output
+  bool lammps_solver = true;
+  kifmm::Choice choice{0, 0, -1};
+  if (sp.name == "kifmm") {
+    if (periodic) throw std::runtime_error("kifmm: periodic boundaries are not supported yet");
+    std::string acc = sp.has("acc") ? sp.kv.at("acc") : "1e-6";
+    std::string mod;
+    if (sp.has("order")) {
+      mod += " order " + sp.kv.at("order");
+      choice.order = std::stoi(sp.kv.at("order"));
+    } else {
+      choice = kifmm::choose_order(kifmm::KernelSpec{}, std::stod(acc));
+    }
+    if (sp.has("leaf")) mod += " leaf " + sp.kv.at("leaf");
+    if (sp.has("cache")) mod += " cache " + sp.kv.at("cache");
+    commands(lmp, "pair_style none\nkspace_style kifmm " + acc + "\n" +
+                 (mod.empty() ? "" : "kspace_modify kifmm" + mod + "\n"));
+    extra = ", \"order\": " + std::to_string(choice.order) +
+        ", \"calibrated_error\": " + fmtd(choice.measured_error);
+  } else if (sp.name == "msm") {
+    if (periodic) throw std::runtime_error("msm is run for open boundaries only here");
+    const double cut = sp.num("cut", 3.0) * spacing;
+    const double acc = sp.num("acc", 1e-4) * f_rms;
+    std::string s = "pair_style coul/msm " + fmtd(cut) + "\npair_coeff * *\npair_modify table 0\n" +
+        "kspace_style msm " + fmtd(acc) + "\nkspace_modify cutoff/adjust no\n";
+    if (sp.has("order")) s += "kspace_modify order " + sp.kv.at("order") + "\n";
+    s += "neighbor " + fmtd(0.1 * cut) + " bin\nneigh_modify one 200000 page 2000000\n";
+    commands(lmp, s);
+    extra = ", \"cutoff\": " + fmtd(cut) + ", \"accuracy_abs\": " + fmtd(acc);
+  } else if (sp.name == "ewald" || sp.name == "pppm") {
+    if (!periodic) throw std::runtime_error(sp.name + " is run for periodic cases only");
+    const double cut = sp.num("cut", 3.0) * spacing;
+    const double acc = sp.num("acc", 1e-4) * f_rms;
+    commands(lmp, "pair_style coul/long " + fmtd(cut) + "\npair_coeff * *\npair_modify table 0\n" +
+                 "kspace_style " + sp.name + " " + fmtd(acc) + "\nneighbor " + fmtd(0.1 * cut) +
+                 " bin\nneigh_modify one 200000 page 2000000\n");
+    extra = ", \"cutoff\": " + fmtd(cut) + ", \"accuracy_abs\": " + fmtd(acc);
+  } else if (sp.name == "coulcut") {
+    const double *lo = lmp->domain->boxlo, *hi = lmp->domain->boxhi;
+    double diag = 0;
+    for (int d = 0; d < 3; ++d) diag += (hi[d] - lo[d]) * (hi[d] - lo[d]);
+    const double cut = 1.01 * std::sqrt(diag);
+    commands(lmp, "pair_style coul/cut " + fmtd(cut) + "\npair_coeff * *\nneighbor " +
+                 fmtd(0.01 * cut) + " nsq\nneigh_modify one 2000000 page 20000000\n");
+  } else if (sp.name == "direct") {
+    lammps_solver = false;
+  } else {
+    throw std::runtime_error("unknown solver " + sp.name);
+  }
+
+  std::vector<double> t_eval, t_pair, t_kspace;
+  double t_setup = 0;
+  AtomsByTag g;
+  if (lammps_solver) {
+    double t0 = wall();
+    commands(lmp, "run 0 post no");
+    t_setup = wall() - t0;
+    Atom *atom = lmp->atom;
+    Force *force = lmp->force;
+    const double t_start = wall();
+    for (int r = 0; r < 1000; ++r) {
+      const int nall = atom->nlocal + (force->newton ? atom->nghost : 0);
+      double tb = wall();
+      for (int i = 0; i < nall; ++i) atom->f[i][0] = atom->f[i][1] = atom->f[i][2] = 0.0;
+      double tp = wall();
+      if (force->pair) force->pair->compute(0, 0);
+      double tk = wall();
+      if (force->kspace) force->kspace->compute(0, 0);
+      double te = wall();
+      if (force->newton) lmp->comm->reverse_comm();
+      double tr = wall();
+      t_pair.push_back(tk - tp);
+      t_kspace.push_back(te - tk);
+      t_eval.push_back(tr - tb);
+      if ((int) t_eval.size() >= min_repeats && wall() - t_start >= min_time) break;
+      if (wall() - t_start > 30 * min_time && (int) t_eval.size() >= 1) break;
+    }
+    g = gather(lmp);
+  } else {
+    g = gather(lmp);
+    std::vector<double> sx, sq;
+    for (int t = 0; t < g.maxtag; ++t)
+      if (std::isfinite(g.x[3 * t]) && g.q[t] != 0.0) {
+        sx.insert(sx.end(), {g.x[3 * t], g.x[3 * t + 1], g.x[3 * t + 2]});
+        sq.push_back(g.q[t]);
+      }
+    std::vector<double> grad(3 * (size_t) g.maxtag);
+    const double t_start = wall();
+    for (int r = 0; r < 1000; ++r) {
+      double tb = wall();
+      kifmm::direct_sum(kifmm::KernelSpec{}, sq.size(), sx.data(), sq.data(), g.maxtag,
+                        g.x.data(), nullptr, grad.data());
+      t_eval.push_back(wall() - tb);
+      if ((int) t_eval.size() >= min_repeats && wall() - t_start >= min_time) break;
+      if (wall() - t_start > 30 * min_time && (int) t_eval.size() >= 1) break;
+    }
+    const double qqrd2e = lmp->force->qqr2e / lmp->force->dielectric;
+    for (int t = 0; t < g.maxtag; ++t)
+      for (int d = 0; d < 3; ++d) g.f[3 * t + d] = -qqrd2e * g.q[t] * grad[3 * t + d];
+  }
+  const long hwm = status_kb("VmHWM:");
+  const double load1 = load_average();
+
+  // errors of the total forces against the reference (sampled atoms only)
+  Reference ref = read_reference(get(a, "ref"));
+  if (ref.maxtag != g.maxtag) throw std::runtime_error("reference does not match the data file");
+  double num = 0, den = 0, fmax_err = 0;
+  size_t ns = 0;
+  std::map<int, std::array<double, 6>> net;    // clump -> sum F, sum F_exact
+  std::map<int, int> net_count;
+  for (int t = 0; t < g.maxtag; ++t) {
+    if (!std::isfinite(ref.f[3 * t])) continue;
+    ++ns;
+    for (int d = 0; d < 3; ++d) {
+      const double e = g.f[3 * t + d] - ref.f[3 * t + d];
+      num += e * e;
+      den += ref.f[3 * t + d] * ref.f[3 * t + d];
+      fmax_err = std::max(fmax_err, std::fabs(e));
+    }
+    if (clump > 1) {
+      auto &s = net[t / clump];
+      for (int d = 0; d < 3; ++d) {
+        s[d] += g.f[3 * t + d];
+        s[3 + d] += ref.f[3 * t + d];
+      }
+      ++net_count[t / clump];
+    }
+  }
+  const double err = den > 0 ? std::sqrt(num / den) : std::sqrt(num);
+  double cnum = 0, cden = 0, cfnet = 0;
+  int nclumps = 0;
+  for (auto &[c, s] : net) {
+    if (net_count[c] != std::min(clump, g.maxtag - c * clump)) continue;    // whole clumps only
+    ++nclumps;
+    for (int d = 0; d < 3; ++d) {
+      cnum += (s[d] - s[3 + d]) * (s[d] - s[3 + d]);
+      cden += s[3 + d] * s[3 + d];
+    }
+  }
+  if (nclumps > 0) cfnet = std::sqrt(cden / nclumps);
+
+  // the kifmm style's engine statistics (of the last evaluation)
+  if (auto *kk = dynamic_cast<KSpaceKIFMM *>(lmp->force->kspace)) {
+    const kifmm::Stats &st = kk->engine_stats();
+    extra += ", \"depth\": " + std::to_string(st.depth) + ", \"leaves\": " +
+        std::to_string(st.n_leaves) + ", \"operator_mb\": " + fmtd(st.operator_bytes / 1048576.0) +
+        ", \"tree_mb\": " + fmtd(st.tree_bytes / 1048576.0);
+  }
+
+  const bool finite = std::isfinite(err);
+  printf("RESULT {\"solver\": \"%s\", \"spec\": \"%s\", \"natoms\": %lld, \"sampled\": %zu, "
+         "\"error\": %.6e, \"max_abs_error\": %.6e, \"f_rms\": %.6e, "
+         "\"clump_error\": %s, \"clumps_sampled\": %d, \"clump_f_rms\": %.6e, "
+         "\"t_eval\": %.6e, \"t_eval_min\": %.6e, \"t_pair\": %.6e, \"t_kspace\": %.6e, "
+         "\"repeats\": %zu, \"t_setup\": %.6e, \"mem_mb\": %.3f, \"rss_base_mb\": %.3f, "
+         "\"hwm_reset\": %s, \"omp_threads\": %d, \"load\": [%.2f, %.2f], "
+         "\"spacing\": %.6e%s}\n",
+         sp.name.c_str(), get(a, "solver").c_str(), (long long) lmp->atom->natoms, ns,
+         finite ? err : -1.0, fmax_err, std::sqrt(den / std::max<size_t>(ns, 1)),
+         nclumps > 0 ? fmtd(cden > 0 ? std::sqrt(cnum / cden) : std::sqrt(cnum)).c_str() : "null",
+         nclumps, cfnet, median(t_eval), *std::min_element(t_eval.begin(), t_eval.end()),
+         t_pair.empty() ? 0.0 : median(t_pair), t_kspace.empty() ? 0.0 : median(t_kspace),
+         t_eval.size(), t_setup, std::max(0L, hwm - rss0) / 1024.0, rss0 / 1024.0,
+         hwm_reset ? "true" : "false", omp_get_max_threads(), load0, load1, spacing,
+         extra.c_str());
+  fflush(stdout);
+  delete lmp;
+  return finite ? 0 : 3;
+}
+
+}    // namespace
+
+int main(int argc, char **argv)
+{
+  MPI_Init(&argc, &argv);
+  int rc = 0;
+  try {
+    if (argc < 2) throw std::runtime_error("usage: bench_solvers gen|ref|run --key value ...");
+    const std::string cmd = argv[1];
+    Args a = parse_args(argc, argv, 2);
+    if (cmd == "gen")
+      rc = cmd_gen(a);
+    else if (cmd == "ref")
+      rc = cmd_ref(a);
+    else if (cmd == "run")
+      rc = cmd_run(a);
+    else
+      throw std::runtime_error("unknown command " + cmd);
+  } catch (std::exception &e) {
+    fprintf(stderr, "bench_solvers: %s\n", e.what());
+    rc = 2;
+  }
+  MPI_Finalize();
+  return rc;
+}

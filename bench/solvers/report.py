@@ -1,0 +1,669 @@
+#!/usr/bin/env python3
+"""Report: tables (markdown) and plots (PNG) from the results of run_bench.py.
+
+Matched-error times: each solver's runs on one case and N form its Pareto front (runs not
+beaten in both time and error by another run of the same solver); the time at error E is
+interpolated linearly in log(time)-log(error) between the two front points around E. If even
+the fastest run is more accurate than E, its time is used (an upper bound, marked <=); if no
+run reaches E the solver has no time at E (n/r). Direct summation is exact: its time holds at
+every E; above the N where it was run it is extrapolated as N^2 (marked ~).
+"""
+
+import argparse
+import json
+import math
+import os
+import sys
+
+TARGETS = (1e-3, 1e-5, 1e-7)
+EXACT = ("direct", "coulcut")
+COLORS = {"kifmm": "tab:blue", "msm": "tab:orange", "direct": "tab:green",
+          "coulcut": "tab:olive", "ewald": "tab:red", "pppm": "tab:purple"}
+LABELS = {"kifmm": "kifmm", "msm": "msm (pair coul/msm + kspace msm)",
+          "direct": "direct sum (kifmm::direct_sum)", "coulcut": "direct sum (LAMMPS coul/cut)",
+          "ewald": "ewald", "pppm": "pppm"}
+
+
+def load(path):
+    recs = {}
+    if not os.path.exists(path):
+        return []
+    with open(path) as f:
+        for line in f:
+            line = line.strip()
+            if not line:
+                continue
+            try:
+                r = json.loads(line)
+            except json.JSONDecodeError:
+                continue
+            recs[(r.get("kind"), r.get("case"), r.get("n"), r.get("spec"))] = r    # latest wins
+    return list(recs.values())
+
+
+def ok_runs(recs, case=None, n=None, solver=None):
+    out = []
+    for r in recs:
+        if r.get("kind") != "run" or r.get("status") != "ok":
+            continue
+        if case is not None and r["case"] != case:
+            continue
+        if n is not None and r["n"] != n:
+            continue
+        if solver is not None and r["solver"] != solver:
+            continue
+        if not (r.get("error", -1) >= 0 and math.isfinite(r["error"])):
+            continue
+        out.append(r)
+    return out
+
+
+def front(runs, key="error"):
+    pts = sorted(runs, key=lambda r: (r["t_eval"], r[key]))
+    out, best = [], float("inf")
+    for r in pts:
+        if r[key] < best:
+            out.append(r)
+            best = r[key]
+    return out
+
+
+def floor_err(e):
+    return max(e, 1e-16)
+
+
+def time_at(runs, target, key="error"):
+    """(time, flag) at error `target` on the Pareto front; flag '' interpolated, '<=' upper
+    bound (fastest run already better), None when not reached."""
+    f = front([r for r in runs if r.get(key) is not None], key)
+    if not f:
+        return None, None
+    if f[0][key] <= target:
+        return f[0]["t_eval"], "<="
+    for a, b in zip(f, f[1:]):
+        if a[key] > target >= b[key]:
+            la, lb = math.log(floor_err(a[key])), math.log(floor_err(b[key]))
+            w = (math.log(target) - la) / (lb - la) if lb != la else 1.0
+            return math.exp(math.log(a["t_eval"]) + w * (math.log(b["t_eval"]) -
+                                                         math.log(a["t_eval"]))), ""
+    return None, None
+
+
+def direct_time(recs, case, n):
+    """Time of the exact direct sum at N: measured, or extrapolated as N^2 from the largest
+    measured N of the case."""
+    runs = ok_runs(recs, case, n, "direct")
+    if runs:
+        return min(r["t_eval"] for r in runs), ""
+    meas = [r for r in ok_runs(recs, case, None, "direct")]
+    if not meas:
+        return None, None
+    r = max(meas, key=lambda r: r["natoms"])
+    natoms = next((x["natoms"] for x in ok_runs(recs, case, n)), None)
+    if natoms is None:
+        return None, None
+    return r["t_eval"] * (natoms / r["natoms"]) ** 2, "~"
+
+
+def fmt_t(t, flag=""):
+    if t is None:
+        return "n/r"
+    s = f"{t:.3g}" if t >= 1e-3 else f"{t:.2e}"
+    return (flag or "") + s
+
+
+def fmt_e(e):
+    if e is None:
+        return "-"
+    return f"{e:.2e}"
+
+
+def fmt_n(n):
+    if n >= 1000 and n % 1000 == 0:
+        k = n // 1000
+        return f"{k // 1000}M" if k % 1000 == 0 else f"{k}k"
+    return str(n)
+
+
+def cases_of(recs, kind="run"):
+    seen = []
+    for r in recs:
+        if r.get("kind") == kind and r["case"] not in seen:
+            seen.append(r["case"])
+    return seen
+
+
+def ns_of(recs, case):
+    return sorted({r["n"] for r in recs if r.get("kind") == "run" and r["case"] == case})
+
+
+def ref_of(recs, case, n):
+    for r in recs:
+        if r.get("kind") == "reference" and r["case"] == case and r["n"] == n:
+            return r
+    return None
+
+
+def ratio(a, b):
+    if a is None or b is None or b <= 0:
+        return None
+    return a / b
+
+
+def fmt_ratio(x, flag=""):
+    if x is None:
+        return "n/r"
+    return f"{flag}{x:.3g}x" if x < 100 else f"{flag}{x:.0f}x"
+
+
+# ----------------------------------------------------------------------------- plots
+
+def make_plots(recs, outdir, cases, profile):
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        print("report.py: matplotlib not available, no plots", file=sys.stderr)
+        return {}
+    files = {}
+    for case in cases:
+        ns = ns_of(recs, case)
+        if not ns:
+            continue
+        ncol = min(len(ns), 4)
+        fig, axes = plt.subplots(1, ncol, figsize=(4.2 * ncol, 4.0), squeeze=False)
+        for ax, n in zip(axes[0], ns[-ncol:]):
+            runs = ok_runs(recs, case, n)
+            clumped = any(r.get("clump_error") is not None for r in runs)
+            for solver in ("kifmm", "msm", "ewald", "pppm", "direct", "coulcut"):
+                rs = [r for r in runs if r["solver"] == solver]
+                if not rs:
+                    continue
+                c = COLORS[solver]
+                ax.scatter([r["t_eval"] for r in rs], [floor_err(r["error"]) for r in rs],
+                           color=c, s=18, label=LABELS[solver] if n == ns[-ncol] else None)
+                if solver not in EXACT:
+                    fr = front(rs)
+                    ax.plot([r["t_eval"] for r in fr], [floor_err(r["error"]) for r in fr],
+                            color=c, lw=1.2)
+                if clumped and solver not in EXACT:
+                    rc = [r for r in rs if r.get("clump_error") is not None]
+                    ax.scatter([r["t_eval"] for r in rc], [floor_err(r["clump_error"]) for r in rc],
+                               facecolors="none", edgecolors=c, s=22,
+                               label=(f"{solver}: clump net-force error" if n == ns[-ncol]
+                                      else None))
+            for e in TARGETS:
+                ax.axhline(e, color="0.8", lw=0.6, ls=":")
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            natoms = runs[0]["natoms"] if runs else n
+            ref = ref_of(recs, case, n)
+            sampled = ref and ref.get("sampled", natoms) < natoms
+            ax.set_title(f"{case}, N = {natoms}" + (" (sampled ref.)" if sampled else ""),
+                         fontsize=9)
+            ax.set_xlabel("time per force evaluation [s]")
+            ax.set_ylabel("relative force error")
+            ax.grid(True, which="major", lw=0.3)
+        axes[0][0].legend(fontsize=7, loc="lower left")
+        fig.tight_layout()
+        fn = os.path.join(outdir, f"pareto_{case}.png")
+        fig.savefig(fn, dpi=110)
+        plt.close(fig)
+        files[f"pareto_{case}"] = fn
+
+    # time versus N at matched error
+    scal = [c for c in cases if len(ns_of(recs, c)) >= 2]
+    if scal:
+        ncol = min(len(scal), 3)
+        nrow = (len(scal) + ncol - 1) // ncol
+        fig, axes = plt.subplots(nrow, ncol, figsize=(4.6 * ncol, 4.0 * nrow), squeeze=False)
+        for k, case in enumerate(scal):
+            ax = axes[k // ncol][k % ncol]
+            ns = ns_of(recs, case)
+            natoms = {n: ok_runs(recs, case, n)[0]["natoms"] for n in ns if ok_runs(recs, case, n)}
+            for solver, style in (("kifmm", "-"), ("msm", "--")):
+                for e, mk in zip(TARGETS, ("o", "s", "^")):
+                    xs, ys = [], []
+                    for n in ns:
+                        t, flag = time_at(ok_runs(recs, case, n, solver), e)
+                        if t is not None and n in natoms:
+                            xs.append(natoms[n])
+                            ys.append(t)
+                    if xs:
+                        ax.plot(xs, ys, style, marker=mk, color=COLORS[solver], ms=4,
+                                label=f"{solver} @ {e:.0e}")
+            xs, ys, xe, ye = [], [], [], []
+            for n in ns:
+                t, flag = direct_time(recs, case, n)
+                if t is not None and n in natoms:
+                    (xe if flag == "~" else xs).append(natoms[n])
+                    (ye if flag == "~" else ys).append(t)
+            if xs:
+                ax.plot(xs, ys, "-", marker="d", color=COLORS["direct"], ms=4, label="direct")
+            if xe:
+                ax.plot(xs[-1:] + xe, ys[-1:] + ye, ":", marker="d", mfc="none",
+                        color=COLORS["direct"], ms=4, label="direct (N^2 extrapolated)")
+            # O(N) guide through kifmm's first point at 1e-5
+            t0 = [(natoms[n], time_at(ok_runs(recs, case, n, "kifmm"), 1e-5)[0]) for n in ns
+                  if n in natoms]
+            t0 = [p for p in t0 if p[1] is not None]
+            if t0:
+                x0, y0 = t0[0]
+                xx = [x0, max(natoms.values())]
+                ax.plot(xx, [y0 * x / x0 for x in xx], color="0.5", lw=0.8, ls="-.",
+                        label="O(N) guide")
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.set_title(case, fontsize=9)
+            ax.set_xlabel("N (atoms)")
+            ax.set_ylabel("time per force evaluation [s]")
+            ax.grid(True, lw=0.3)
+            ax.legend(fontsize=6)
+        for k in range(len(scal), nrow * ncol):
+            axes[k // ncol][k % ncol].axis("off")
+        fig.tight_layout()
+        fn = os.path.join(outdir, "time_vs_n.png")
+        fig.savefig(fn, dpi=110)
+        plt.close(fig)
+        files["time_vs_n"] = fn
+
+    # error versus order (kifmm, explicit and calibrated orders) at each case's largest N
+    fig, ax = plt.subplots(figsize=(5.5, 4.0))
+    any_line = False
+    for case in cases:
+        ns = ns_of(recs, case)
+        for n in ns[-1:]:
+            rs = [r for r in ok_runs(recs, case, n, "kifmm") if r.get("order")]
+            byo = {}
+            for r in rs:
+                byo.setdefault(r["order"], []).append(r["error"])
+            if len(byo) >= 2:
+                os_ = sorted(byo)
+                ax.plot(os_, [floor_err(min(byo[o])) for o in os_], marker="o", ms=4,
+                        label=f"{case} N={rs[0]['natoms']}")
+                any_line = True
+    if any_line:
+        ax.set_yscale("log")
+        ax.set_xlabel("kifmm order P (points per surface edge)")
+        ax.set_ylabel("relative force error")
+        ax.grid(True, lw=0.3)
+        ax.legend(fontsize=7)
+        fig.tight_layout()
+        fn = os.path.join(outdir, "error_vs_order.png")
+        fig.savefig(fn, dpi=110)
+        files["error_vs_order"] = fn
+    plt.close(fig)
+    return files
+
+
+# ----------------------------------------------------------------------------- tables
+
+def settings_table(recs):
+    runs = [r for r in recs if r.get("kind") in ("run", "setup", "reference")]
+    if not runs:
+        return "(no results)\n"
+    dates = sorted(r["date"] for r in runs if r.get("date"))
+    loads = [x for r in runs for x in r.get("load", []) if x >= 0]
+    threads = sorted({str(r.get("omp_threads", r.get("omp_threads_env"))) for r in runs})
+    cpus = sorted({str(r.get("host_cpus")) for r in runs})
+    nok = sum(1 for r in runs if r.get("kind") == "run" and r.get("status") == "ok")
+    nfail = sum(1 for r in runs if r.get("kind") == "run" and r.get("status") != "ok")
+    lines = ["| setting | value |", "|---|---|",
+             f"| measured | {dates[0]} to {dates[-1]} |" if dates else "| measured | - |",
+             f"| OMP_NUM_THREADS (kifmm engine, direct sum) | {', '.join(threads)} |",
+             "| MPI ranks | 1 (LAMMPS styles msm, coul/msm, coul/cut are serial) |",
+             f"| host CPUs (shared with other work) | {', '.join(cpus)} |",
+             (f"| 1-min load average during the runs | {min(loads):.1f} to {max(loads):.1f} |"
+              if loads else "| load average | - |"),
+             f"| solver runs | {nok} ok, {nfail} failed or stopped (listed in the tables) |"]
+    return "\n".join(lines) + "\n"
+
+
+def ratio_table(recs, cases):
+    hdr = "| case | N |"
+    sep = "|---|---|"
+    for e in TARGETS:
+        hdr += f" kifmm @ {e:.0e} [s] | msm / kifmm | direct / kifmm |"
+        sep += "---|---|---|"
+    lines = [hdr, sep]
+    for case in cases:
+        for n in ns_of(recs, case):
+            runs = ok_runs(recs, case, n)
+            if not runs:
+                continue
+            row = f"| {case} | {runs[0]['natoms']} |"
+            td, fd = direct_time(recs, case, n)
+            for e in TARGETS:
+                tk, fk = time_at(ok_runs(recs, case, n, "kifmm"), e)
+                tm, fm = time_at(ok_runs(recs, case, n, "msm"), e)
+                rm = ratio(tm, tk)
+                rd = ratio(td, tk)
+                # a ratio with an upper-bound time in the numerator is an upper bound, in the
+                # denominator a lower bound: mark both as approximate
+                flag_m = "~" if (fm == "<=" or fk == "<=") else ""
+                flag_d = "~" if (fd == "~" or fk == "<=") else ""
+                row += (f" {fmt_t(tk, fk)} | {fmt_ratio(rm, flag_m) if tm else 'n/r'} |"
+                        f" {fmt_ratio(rd, flag_d)} |")
+            lines.append(row)
+    return "\n".join(lines) + "\n"
+
+
+def runs_table(recs, case):
+    ns = ns_of(recs, case)
+    clumped = any(r.get("clump_error") is not None for r in ok_runs(recs, case))
+    hdr = "| solver | N | error |" + (" clump net-force error |" if clumped else "") + \
+        " eval [s] | pair / kspace [s] | setup [s] | memory [MB] | runs | status |"
+    sep = "|---|---|---|" + ("---|" if clumped else "") + "---|---|---|---|---|---|"
+    lines = [hdr, sep]
+    for n in ns:
+        rs = [r for r in recs if r.get("kind") == "run" and r["case"] == case and r["n"] == n]
+        order = {"kifmm": 0, "msm": 1, "ewald": 2, "pppm": 3, "direct": 4, "coulcut": 5}
+        rs.sort(key=lambda r: (order.get(r["solver"], 9), r.get("order") or 0, r["spec"]))
+        for r in rs:
+            spec = r["spec"]
+            if r["solver"] == "kifmm" and r.get("order"):
+                spec += f" (P={r['order']})"
+            if r["status"] != "ok":
+                lines.append(f"| {spec} | {r.get('natoms', n)} | - |" + (" - |" if clumped else "")
+                             + f" - | - | - | - | - | {r['status']}: {r['message']} |")
+                continue
+            ce = fmt_e(r.get("clump_error")) if clumped else None
+            pk = (f"{r['t_pair']:.3g} / {r['t_kspace']:.3g}" if r["solver"] not in ("direct",)
+                  else "-")
+            lines.append(f"| {spec} | {r['natoms']} | {fmt_e(r['error'])} |" +
+                         (f" {ce} |" if clumped else "") +
+                         f" {fmt_t(r['t_eval'])} | {pk} | {r['t_setup']:.3g} | {r['mem_mb']:.0f} |"
+                         f" {r['repeats']} | ok |")
+    return "\n".join(lines) + "\n"
+
+
+def reference_table(recs, cases):
+    lines = ["| case | N | reference atoms | RMS force | time [s] | clump scale |",
+             "|---|---|---|---|---|---|"]
+    for case in cases:
+        for n in ns_of(recs, case):
+            r = ref_of(recs, case, n)
+            if not r:
+                continue
+            lines.append(f"| {case} | {r['natoms']} | "
+                         f"{'all' if r['sampled'] >= r['natoms'] else str(r['sampled']) + ' sampled'}"
+                         f" | {r['f_rms']:.4g} | {r['time']:.3g} | {r.get('clump_scale', 1):.3g} |")
+    return "\n".join(lines) + "\n"
+
+
+def scaling_table(recs, cases):
+    lines = ["| case | error | N range | kifmm times [s] | fitted exponent (time ~ N^k) |",
+             "|---|---|---|---|---|"]
+    for case in cases:
+        ns = ns_of(recs, case)
+        if len(ns) < 2:
+            continue
+        for e in TARGETS:
+            pts = []
+            for n in ns:
+                t, flag = time_at(ok_runs(recs, case, n, "kifmm"), e)
+                runs = ok_runs(recs, case, n)
+                if t is not None and runs:
+                    pts.append((runs[0]["natoms"], t))
+            if len(pts) < 2:
+                continue
+            xs = [math.log(p[0]) for p in pts]
+            ys = [math.log(p[1]) for p in pts]
+            mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
+            den = sum((x - mx) ** 2 for x in xs)
+            k = sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / den if den else float("nan")
+            lines.append(f"| {case} | {e:.0e} | {pts[0][0]} - {pts[-1][0]} | "
+                         f"{', '.join(fmt_t(p[1]) for p in pts)} | {k:.2f} |")
+    return "\n".join(lines) + "\n"
+
+
+def order_table(recs, cases):
+    rows = []
+    for case in cases:
+        ns = ns_of(recs, case)
+        if not ns:
+            continue
+        n = ns[-1]
+        rs = [r for r in ok_runs(recs, case, n, "kifmm") if r.get("order")]
+        byo = {}
+        for r in rs:
+            if r["order"] not in byo or r["error"] < byo[r["order"]]["error"]:
+                byo[r["order"]] = r
+        if byo:
+            rows.append((case, rs[0]["natoms"], byo))
+    orders = sorted({o for _, _, b in rows for o in b})
+    if not orders:
+        return "(no kifmm runs)\n"
+    lines = ["| case | N | " + " | ".join(f"P={o}" for o in orders) + " | falls monotonically |",
+             "|---|---|" + "---|" * len(orders) + "---|"]
+    for case, natoms, b in rows:
+        errs = [b[o]["error"] for o in orders if o in b]
+        mono = all(y <= x * 1.5 for x, y in zip(errs, errs[1:]))
+        lines.append(f"| {case} | {natoms} | " +
+                     " | ".join(fmt_e(b[o]["error"]) if o in b else "-" for o in orders) +
+                     f" | {'yes' if mono else 'NO'} |")
+    return "\n".join(lines) + "\n"
+
+
+def setup_table(recs):
+    rs = [r for r in recs if r.get("kind") == "setup" and r.get("status") == "ok"]
+    if not rs:
+        return "(not measured in this profile)\n"
+    by = {}
+    for r in rs:
+        cold = "cache=none" in r["spec"]
+        by.setdefault(r["order"], {})["cold" if cold else "warm"] = r
+    lines = ["| order P | setup, no cache [s] | setup, operators from disk cache [s] | "
+             "operators [MB] | eval, 1000 atoms [s] |", "|---|---|---|---|---|"]
+    for o in sorted(by):
+        c, w = by[o].get("cold"), by[o].get("warm")
+        lines.append(f"| {o} | {c['t_setup']:.3g} | " + (f"{w['t_setup']:.3g}" if w else "-") +
+                     f" | {c.get('operator_mb', 0):.1f} | {fmt_t(c['t_eval'])} |")
+    return "\n".join(lines) + "\n"
+
+
+def hard_table(recs, cases):
+    lines = ["| case | N | solver | error (atoms) | clump net-force error | "
+             "RMS clump net force / RMS atom force | eval [s] |", "|---|---|---|---|---|---|---|"]
+    any_row = False
+    for case in cases:
+        for n in ns_of(recs, case):
+            rs = [r for r in ok_runs(recs, case, n) if r.get("clump_error") is not None
+                  and r["solver"] not in EXACT]
+            for solver in ("kifmm", "msm"):
+                for r in front([x for x in rs if x["solver"] == solver]):
+                    any_row = True
+                    lines.append(f"| {case} | {r['natoms']} | {r['spec']} | {fmt_e(r['error'])} | "
+                                 f"{fmt_e(r['clump_error'])} | "
+                                 f"{r['clump_f_rms'] / r['f_rms']:.3g} | {fmt_t(r['t_eval'])} |")
+    return ("\n".join(lines) + "\n") if any_row else "(no clump cases in these results)\n"
+
+
+def clump_ratio_table(recs, cases):
+    """Matched error on the clump net forces (what moves a rigid clump)."""
+    hdr = "| case | N |" + "".join(f" kifmm @ {e:.0e} [s] | msm / kifmm |" for e in TARGETS)
+    lines = [hdr, "|---|---|" + "---|---|" * len(TARGETS)]
+    any_row = False
+    for case in cases:
+        for n in ns_of(recs, case):
+            runs = [r for r in ok_runs(recs, case, n) if r.get("clump_error") is not None]
+            if not runs:
+                continue
+            any_row = True
+            row = f"| {case} | {runs[0]['natoms']} |"
+            for e in TARGETS:
+                tk, fk = time_at([r for r in runs if r["solver"] == "kifmm"], e, "clump_error")
+                tm, fm = time_at([r for r in runs if r["solver"] == "msm"], e, "clump_error")
+                flag = "~" if "<=" in (fk, fm) else ""
+                row += f" {fmt_t(tk, fk)} | {fmt_ratio(ratio(tm, tk), flag) if tm else 'n/r'} |"
+            lines.append(row)
+    return ("\n".join(lines) + "\n") if any_row else ""
+
+
+def pending_list(cfg_path, profile):
+    try:
+        with open(cfg_path) as f:
+            cfg = json.load(f)
+        cases = cfg["profiles"][profile]["cases"]
+    except (OSError, KeyError, json.JSONDecodeError):
+        return []
+    return [(c["name"], c.get("pending", "disabled")) for c in cases
+            if not c.get("enabled", True)]
+
+
+def write_doc(recs, doc, plots, profile, cases_path):
+    d = os.path.dirname(os.path.abspath(doc))
+    rel = {k: os.path.relpath(v, d) for k, v in plots.items()}
+    cases = cases_of(recs)
+    main_cases = [c for c in cases if not any(r.get("hard") and r["case"] == c
+                                              for r in recs if r.get("kind") == "run")]
+    hard_cases = [c for c in cases if c not in main_cases]
+    out = []
+    w = out.append
+    w("# Speed versus error: kspace kifmm, LAMMPS msm and direct summation\n")
+    w("<!-- generated by bench/solvers/report.py from bench/solvers/results/results.jsonl; "
+      "edit report.py, not this file -->\n")
+    w(f"Profile `{profile}`. Reproduce with one command (hours on one core; resumable, runs "
+      "already in the results file are kept):\n")
+    w("```sh\nbash bench/solvers/run.sh            # full: bench/solvers/results/ + this file\n"
+      "bash bench/solvers/run.sh --quick    # N <= 1e4, minutes, report in the build directory\n"
+      "bash bench/solvers/run.sh --report-only   # tables and plots from the stored results\n```\n")
+    w("## What is measured\n")
+    w("""All solvers see the same atoms (one LAMMPS data file per configuration and N, `units lj`,
+unit charges, dielectric 1, `boundary f f f`) and are compared with the same exact
+reference, in one invocation of the driver (`bench/solvers/run_bench.py` calling
+`bench_solvers`, one child process per solver run):
+
+* **error**: the relative RMS error of the **total** force on the atoms,
+  `||F - F_exact|| / ||F_exact||` (sums over atoms and components). For msm the total force
+  is pair coul/msm + kspace msm, the forces the atoms feel. `F_exact` is the direct sum by
+  `kifmm::direct_sum` on every atom for N <= 120000; above that (the 1e6 runs) it is computed
+  on a random sample of 4000 atoms (whole clumps for clump configurations) and the error is
+  the same ratio over the sampled atoms only (**sampled reference**, marked in the plots).
+  The reference was checked against LAMMPS's own direct sum (pair coul/cut with a cutoff
+  beyond the box, solver `coulcut`): they agree to ~1e-15 where both ran.
+* **eval**: time per force evaluation after setup: `pair->compute(0,0)` plus
+  `kspace->compute(0,0)` called directly (forces only, no energy/virial, no neighbor list
+  rebuild: atoms do not move), timed with MPI_Wtime, **median** of at least 3 evaluations and
+  at least 1 s. `pair / kspace` splits it.
+* **setup**: wall time of the first `run 0 post no` (init, neighbor lists, grid or operator
+  setup and the first evaluation including energy). kifmm reads its translation operators
+  from a warm disk cache (filled by the `setup` step of the campaign); the cold precompute
+  per order is in the operator setup table.
+* **memory**: peak resident memory of the solver: `/proc/self/status` VmHWM after the
+  evaluations minus VmRSS after `read_data` (VmHWM is reset through
+  `/proc/self/clear_refs` after read_data). Each solver runs in its own child process, so
+  the peak is its own.
+* kifmm: `pair_style none`, `kspace_style kifmm ACC` (order and leaf from the calibration
+  table) or `kspace_modify kifmm order P` for explicit orders (`P=` in the tables).
+* msm: `pair_style coul/msm C*s` (s = mean atom spacing of the box, `(V/N)^(1/3)`),
+  `pair_modify table 0`, `kspace_style msm A*F_rms`, `kspace_modify cutoff/adjust no` and
+  optionally `order`. LAMMPS's msm accuracy is absolute (relative to the force between two
+  unit charges at unit distance); multiplying by the reference's RMS force makes A the
+  requested relative error. Several (C, A, order) are run and the Pareto front is used: the
+  comparison is against msm's best setting for each error, not against one guess.
+* direct: `kifmm::direct_sum` (vectorized O(N^2), the same code as the reference) on all
+  atoms, up to N = 120000; LAMMPS pair coul/cut (O(N^2) neighbor list) up to N = 12000.
+* Timings are noisy (shared machine, see the load average below): the report compares
+  solvers through **ratios of times measured in the same campaign**, never across machines.
+""")
+    w("## Settings of this run\n")
+    w(settings_table(recs))
+    w("\n## Speed ratio at matched error\n")
+    w("""Time of kifmm at the error E and how many times longer msm and direct summation take
+for the same measured error (larger = kifmm faster). Each solver's time at E is interpolated
+linearly in log(time)-log(error) between the two points of its Pareto front around E; `<=`:
+the solver's fastest run is already more accurate than E (its time is an upper bound, and a
+ratio built from it is marked `~`); `n/r`: no run of that solver reached E; `~` on direct:
+its time is extrapolated as N^2 from the largest N where it ran.
+""")
+    w(ratio_table(recs, main_cases + hard_cases))
+    if "time_vs_n" in rel:
+        w(f"\n![time per evaluation versus N at matched error]({rel['time_vs_n']})\n")
+    w("\n## kifmm scaling with N at fixed error\n")
+    w("Least-squares exponent k of time ~ N^k over the N of each case (1 = O(N)).\n")
+    w(scaling_table(recs, main_cases + hard_cases))
+    w("\n## Hard cases\n")
+    w("""* **dipole3**: neutral rigid clumps of 3 pebbles with charges -1, 0, +1 (the middle pebble
+  has zero charge: it is neither source nor target for kifmm; potentials/dipole3.mol, spacing
+  0.01, scaled down at high N so that clumps do not overlap). The force on each pebble is
+  dominated by its clump partner, but that part cancels in the clump's net force, which is
+  what moves a rigid clump: the **clump net-force error** is
+  `||sum_clump (F - F_exact)|| / ||sum_clump F_exact||` over whole sampled clumps, relative to
+  the small net forces.
+* **platelets**: rigid bodies of 1094 pebbles, two HCP layers of opposite charge
+  (potentials/platelet_n14.mol from tools/clump_shapes.py), 1, 8 and 64 bodies at random
+  orientations: near-cancelling double layers; same net-force error per body.
+* **collapse**: a Plummer sphere 10 times more concentrated (scale radius 0.005 in the unit
+  box) as a stand-in for the end state of a gravitational collapse.
+* **highest orders**: kifmm at P = 12 and 14 (explicit `order`) on every case: the error must
+  keep falling.
+""")
+    w(hard_table(recs, hard_cases))
+    crt = clump_ratio_table(recs, hard_cases)
+    if crt:
+        w("\nMatched error on the clump net forces (same interpolation as above, on the clump "
+          "net-force error):\n\n")
+        w(crt)
+    w("\n### Error versus kifmm order (each case at its largest N)\n")
+    w(order_table(recs, main_cases + hard_cases))
+    if "error_vs_order" in rel:
+        w(f"\n![kifmm error versus order]({rel['error_vs_order']})\n")
+    w("\n### kifmm operator setup per order\n")
+    w(setup_table(recs))
+    w("\n## Pareto fronts (error versus time) per configuration\n")
+    w("Filled markers: relative force error of the atoms; hollow markers: clump net-force "
+      "error. Lines join each solver's Pareto front. Dotted lines: 1e-3, 1e-5, 1e-7.\n")
+    for c in main_cases + hard_cases:
+        if f"pareto_{c}" in rel:
+            w(f"\n![{c}]({rel[f'pareto_{c}']})\n")
+    w("\n## All runs\n")
+    for c in main_cases + hard_cases:
+        w(f"\n### {c}\n")
+        w(runs_table(recs, c))
+    w("\n### Exact references\n")
+    w(reference_table(recs, main_cases + hard_cases))
+    w("\n## Pending\n")
+    pend = pending_list(cases_path, profile)
+    w("""* **Periodic boundaries** (ewald and pppm, periodic configurations, reference ewald at
+  1e-12): kspace kifmm has no periodic mode yet (it stops with an error on periodic boxes).
+  The driver already has the periodic path: `periodic: true` cases in
+  bench/solvers/cases.json run `bench_solvers ref --periodic 1e-12` (LAMMPS ewald reference)
+  and the `periodic` solver set (`ewald:acc=A`, `pppm:acc=A:cut=C`, kifmm); they are
+  `enabled: false` until periodic kifmm exists. Set `enabled` to true and rerun run.sh
+  (only the new runs are measured).
+* **Scene snapshots** (start and end states of the four example scenes): only
+  examples/charges-box exists and it does not write a data file yet. Hook: the
+  `scene_snapshots` case (`config: data`) reads LAMMPS data files listed in `files` with
+  their `atom_style`; enable it when the examples write `write_data` snapshots. Until then
+  the Plummer `collapse` case stands in for the clustered collapse end state.
+""")
+    for name, why in pend:
+        w(f"* case `{name}` of profile `{profile}` disabled: {why}\n")
+    with open(doc, "w") as f:
+        f.write("\n".join(x.rstrip("\n") + "\n" for x in out).replace("\n\n\n", "\n\n"))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--results", required=True)
+    ap.add_argument("--plots", required=True, help="directory for the PNG files")
+    ap.add_argument("--doc", required=True, help="markdown report to write")
+    ap.add_argument("--profile", default="full")
+    ap.add_argument("--cases", default=os.path.join(os.path.dirname(os.path.abspath(__file__)),
+                                                     "cases.json"))
+    ap.add_argument("--no-plots", action="store_true")
+    args = ap.parse_args()
+    recs = load(args.results)
+    if not recs:
+        print(f"report.py: no results in {args.results}", file=sys.stderr)
+        return 1
+    os.makedirs(args.plots, exist_ok=True)
+    plots = {} if args.no_plots else make_plots(recs, args.plots, cases_of(recs), args.profile)
+    write_doc(recs, args.doc, plots, args.profile, args.cases)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

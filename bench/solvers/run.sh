@@ -1,0 +1,68 @@
+#!/usr/bin/env bash
+# Speed-versus-error report of the long-range solvers (kspace kifmm, LAMMPS msm, direct sum):
+# builds bench_solvers, measures (run_bench.py, resumable), writes tables and plots (report.py).
+#
+#   bash bench/solvers/run.sh            full campaign (hours on 1 core): results in
+#                                        bench/solvers/results/, report in doc/benchmarks.md
+#   bash bench/solvers/run.sh --quick    N <= 1e4, few solvers (minutes): report in the build dir
+#   bash bench/solvers/run.sh --tiny     the smoke test's inputs (seconds)
+# Options: --out DIR (results + plots), --doc FILE (report), --build DIR, --bin PATH (no build),
+#   --only CASE[,CASE], --max-n N, --force (rerun what the results file has), --report-only,
+#   --threads T (OMP_NUM_THREADS of the runs, default 1).
+set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+root="$(cd "$here/../.." && pwd)"
+profile=full
+build="${KIFMM_BUILD_DIR:-/work/build-bench}"
+out="" doc="" bin="" only="" maxn="" force="" report_only=0
+threads="${OMP_NUM_THREADS:-1}"
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --quick) profile=quick ;;
+    --tiny) profile=tiny ;;
+    --out) out="$2"; shift ;;
+    --doc) doc="$2"; shift ;;
+    --build) build="$2"; shift ;;
+    --bin) bin="$2"; shift ;;
+    --only) only="$2"; shift ;;
+    --max-n) maxn="$2"; shift ;;
+    --threads) threads="$2"; shift ;;
+    --force) force=--force ;;
+    --report-only) report_only=1 ;;
+    *) echo "run.sh: unknown option $1" >&2; exit 2 ;;
+  esac
+  shift
+done
+if [ "$profile" = full ]; then
+  out="${out:-$here/results}"
+  doc="${doc:-$root/doc/benchmarks.md}"
+else
+  out="${out:-$build/bench_solvers_$profile}"
+  doc="${doc:-$out/benchmarks.md}"
+fi
+mkdir -p "$out"
+work="$out/work"
+[ "$profile" = full ] && work="$build/bench_solvers_work"
+
+# Debian's python3 has matplotlib; a python3 earlier in PATH may not
+py=python3
+for cand in /usr/bin/python3 python3; do
+  if command -v "$cand" >/dev/null && "$cand" -c "import matplotlib" 2>/dev/null; then
+    py="$cand"; break
+  fi
+done
+
+if [ "$report_only" = 0 ]; then
+  if [ -z "$bin" ]; then
+    if [ ! -f "$build/CMakeCache.txt" ]; then cmake -S "$root" -B "$build" >/dev/null; fi
+    make -C "$build" -j2 bench_solvers >/dev/null
+    bin="$build/bench_solvers"
+  fi
+  export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+  "$py" "$here/run_bench.py" --profile "$profile" --bin "$bin" --work "$work" \
+    --results "$out/results.jsonl" --threads "$threads" ${only:+--only "$only"} \
+    ${maxn:+--max-n "$maxn"} $force
+fi
+"$py" "$here/report.py" --profile "$profile" --results "$out/results.jsonl" --plots "$out" \
+  --doc "$doc"
+echo "report: $doc (plots and results in $out)"

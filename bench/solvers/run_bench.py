@@ -1,0 +1,305 @@
+#!/usr/bin/env python3
+"""Measure: run the cases of one profile of cases.json with bench_solvers, one child process
+per solver run (so that each run's peak memory is its own), and append one JSON line per run
+to the results file. Runs already in the results file are skipped (the campaign can be
+stopped and resumed); --force reruns them.
+
+Per case and N: the configuration is generated once (data file), the exact reference is
+computed once (direct sum on all atoms up to limits.full_reference_max_n, else on a random
+sample of limits.reference_sample atoms, whole clumps), then every solver is run on the same
+data file against the same reference.
+"""
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.abspath(os.path.join(HERE, "..", ".."))
+
+
+def log(msg):
+    print(msg, flush=True)
+
+
+def load_results(path):
+    done = {}
+    if os.path.exists(path):
+        with open(path) as f:
+            for line in f:
+                line = line.strip()
+                if not line:
+                    continue
+                try:
+                    r = json.loads(line)
+                except json.JSONDecodeError:
+                    continue    # a line cut by an interrupted run
+                done[(r.get("kind"), r.get("case"), r.get("n"), r.get("spec"))] = r
+    return done
+
+
+def append_result(path, rec):
+    with open(path, "a") as f:
+        f.write(json.dumps(rec, sort_keys=True) + "\n")
+
+
+def rss_mb(pid):
+    try:
+        with open(f"/proc/{pid}/status") as f:
+            for line in f:
+                if line.startswith("VmRSS:"):
+                    return int(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    return 0.0
+
+
+def run_child(cmd, env, timeout, mem_limit_mb, screen):
+    """Runs cmd; returns (status, result dict or None, message). Kills the child (and only it)
+    when it exceeds the time or memory limit."""
+    t0 = time.time()
+    with open(screen + ".stdout", "w") as out, open(screen + ".stderr", "w") as err:
+        p = subprocess.Popen(cmd, stdout=out, stderr=err, env=env)
+        status = None
+        peak = 0.0
+        while p.poll() is None:
+            time.sleep(0.2)
+            peak = max(peak, rss_mb(p.pid))
+            if time.time() - t0 > timeout:
+                status = "timeout"
+            elif peak > mem_limit_mb:
+                status = "memory"
+            if status:
+                p.kill()
+                p.wait()
+                break
+    result = None
+    with open(screen + ".stdout") as f:
+        for line in f:
+            if line.startswith("RESULT "):
+                result = json.loads(line[7:])
+    if status:
+        msg = (f"killed after {time.time() - t0:.0f} s (limit {timeout} s)" if status == "timeout"
+               else f"killed at {peak:.0f} MB RSS (limit {mem_limit_mb} MB)")
+        return status, result, msg
+    if p.returncode != 0 or result is None:
+        tail = ""
+        for fn in (screen + ".stderr", screen):
+            if os.path.exists(fn):
+                with open(fn, errors="replace") as f:
+                    lines = [ln.strip() for ln in f if ln.strip()]
+                errs = [ln for ln in lines if "ERROR" in ln or "bench_solvers:" in ln]
+                if errs:
+                    tail = errs[-1]
+                    break
+                if lines and not tail:
+                    tail = lines[-1]
+        return "failed", result, f"exit code {p.returncode}: {tail}"[:300]
+    return "ok", result, ""
+
+
+def expand(case, sets):
+    specs = []
+    for s in case["solvers"]:
+        specs += sets[s] if s in sets else [s]
+    return specs
+
+
+def pareto(points):
+    """(time, error) points -> the ones not dominated (faster and more accurate)."""
+    pts = sorted(points, key=lambda p: (p[0], p[1]))
+    front, best = [], float("inf")
+    for p in pts:
+        if p[1] < best:
+            front.append(p)
+            best = p[1]
+    return front
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--profile", default="full")
+    ap.add_argument("--cases", default=os.path.join(HERE, "cases.json"))
+    ap.add_argument("--bin", required=True, help="bench_solvers executable")
+    ap.add_argument("--work", required=True, help="directory for data, references and logs")
+    ap.add_argument("--results", required=True, help="results file (JSON lines, appended)")
+    ap.add_argument("--only", default="", help="comma-separated case names")
+    ap.add_argument("--max-n", type=float, default=0, help="skip N above this")
+    ap.add_argument("--force", action="store_true", help="rerun runs already in the results")
+    ap.add_argument("--threads", default=os.environ.get("OMP_NUM_THREADS", "1"))
+    args = ap.parse_args()
+
+    with open(args.cases) as f:
+        cfg = json.load(f)
+    prof = cfg["profiles"][args.profile]
+    sets, lim = cfg["solver_sets"], cfg["limits"]
+    for d in ("data", "ref", "logs", "operator-cache"):
+        os.makedirs(os.path.join(args.work, d), exist_ok=True)
+    env = dict(os.environ)
+    env["OMP_NUM_THREADS"] = str(args.threads)
+    env["KIFMM_CACHE_DIR"] = os.path.join(args.work, "operator-cache")
+    env.setdefault("OMPI_ALLOW_RUN_AS_ROOT", "1")
+    env.setdefault("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+    done = {} if args.force else load_results(args.results)
+    only = set(filter(None, args.only.split(",")))
+    common = {"profile": args.profile, "omp_threads_env": str(args.threads),
+              "host_cpus": os.cpu_count()}
+
+    def record(rec):
+        rec.update(common)
+        rec["date"] = time.strftime("%Y-%m-%d %H:%M:%S")
+        append_result(args.results, rec)
+        done[(rec.get("kind"), rec.get("case"), rec.get("n"), rec.get("spec"))] = rec
+
+    # operator setup cost per order: cold (no cache) and the warm-up that fills the cache the
+    # later runs read, on 1000 uniform atoms
+    orders = prof.get("setup_orders", [])
+    if orders and (not only or "setup" in only):
+        data = os.path.join(args.work, "data", "setup_uniform_1000.data")
+        ref = os.path.join(args.work, "ref", "setup_uniform_1000.ref")
+        if not os.path.exists(ref):
+            subprocess.run([args.bin, "gen", "--config", "uniform", "--n", "1000", "--seed", "1",
+                            "--out", data], check=True, env=env, stdout=subprocess.DEVNULL)
+            subprocess.run([args.bin, "ref", "--data", data, "--out", ref], check=True, env=env,
+                           stdout=subprocess.DEVNULL)
+        for p in orders:
+            for spec in (f"kifmm:order={p}:cache=none", f"kifmm:order={p}"):
+                key = ("setup", "setup", 1000, spec)
+                if key in done:
+                    continue
+                screen = os.path.join(args.work, "logs", f"setup_{spec.replace(':', '_')}.log")
+                st, res, msg = run_child([args.bin, "run", "--data", data, "--ref", ref,
+                                          "--solver", spec, "--min-time", "0.2", "--screen",
+                                          screen], env, lim["timeout_s"],
+                                         lim["memory_limit_mb"], screen)
+                rec = {"kind": "setup", "case": "setup", "n": 1000, "spec": spec, "status": st,
+                       "message": msg}
+                rec.update(res or {})
+                record(rec)
+                log(f"setup {spec}: {st} setup {rec.get('t_setup', float('nan')):.3g} s")
+
+    for case in prof["cases"]:
+        name = case["name"]
+        if only and name not in only:
+            continue
+        if not case.get("enabled", True):
+            log(f"case {name}: disabled ({case.get('pending', 'pending')})")
+            continue
+        periodic = case.get("periodic", False)
+        specs = expand(case, sets)
+        inputs = []
+        if case["config"] == "data":
+            for fn in case["files"]:
+                path = os.path.join(ROOT, fn)
+                if not os.path.exists(path):
+                    log(f"case {name}: {fn} does not exist yet, skipped")
+                    continue
+                with open(path) as f:
+                    natoms = next(int(ln.split()[0]) for ln in f if ln.strip().endswith("atoms"))
+                inputs.append((natoms, path, os.path.basename(fn)))
+        else:
+            for n in case["n"]:
+                inputs.append((n, None, None))
+        prev_n = None
+        for n, given, label in inputs:
+            if args.max_n and n > args.max_n:
+                continue
+            tag = f"{name}_{label or n}"
+            data = given or os.path.join(args.work, "data", tag + ".data")
+            meta_path = os.path.join(args.work, "data", tag + ".json")
+            atom_style = case.get("atom_style", "charge")
+            if not os.path.exists(meta_path):
+                if given:
+                    meta = {"natoms": n, "clump": case.get("clump", 1)}
+                else:
+                    cmd = [args.bin, "gen", "--config", case["config"], "--n", str(n),
+                           "--seed", str(case.get("seed", 1)), "--out", data]
+                    for k, v in case.get("args", {}).items():
+                        cmd += [f"--{k}", os.path.join(ROOT, v) if k == "mol" else v]
+                    out = subprocess.run(cmd, check=True, env=env, capture_output=True, text=True)
+                    meta = json.loads(next(ln[7:] for ln in out.stdout.splitlines()
+                                           if ln.startswith("RESULT ")))
+                with open(meta_path, "w") as f:
+                    json.dump(meta, f)
+            with open(meta_path) as f:
+                meta = json.load(f)
+            clump = meta.get("clump", 1)
+            natoms = meta["natoms"]
+            ref = os.path.join(args.work, "ref", tag + ".ref")
+            if ("reference", name, n, "reference") not in done or not os.path.exists(ref):
+                cmd = [args.bin, "ref", "--data", data, "--out", ref, "--clump", str(clump),
+                       "--atom-style", atom_style]
+                if periodic:
+                    cmd += ["--periodic", prof.get("periodic_reference", "1e-12")]
+                elif natoms > lim["full_reference_max_n"]:
+                    cmd += ["--sample", str(lim["reference_sample"])]
+                t0 = time.time()
+                out = subprocess.run(cmd, env=env, capture_output=True, text=True)
+                if out.returncode != 0:
+                    log(f"{tag}: reference failed: {out.stderr.strip()[-300:]}")
+                    continue
+                res = json.loads(next(ln[7:] for ln in out.stdout.splitlines()
+                                      if ln.startswith("RESULT ")))
+                rec = {"kind": "reference", "case": name, "n": n, "spec": "reference",
+                       "status": "ok", "periodic": periodic, "clump": clump,
+                       "clump_scale": meta.get("clump_scale", 1.0), "config": case["config"],
+                       "wall": time.time() - t0}
+                rec.update(res)
+                record(rec)
+                log(f"{tag}: reference on {res['sampled']} of {res['natoms']} atoms, "
+                    f"{rec['wall']:.1f} s")
+            # msm at large N: only the specs that were on msm's Pareto front at the previous N
+            keep_msm = None
+            if prev_n is not None and n >= lim["prune_msm_from_n"]:
+                prev = [r for (k, c, nn, s), r in done.items()
+                        if k == "run" and c == name and nn == prev_n and r.get("solver") == "msm"
+                        and r.get("status") == "ok"]
+                if prev:
+                    front = pareto([(r["t_eval"], r["error"]) for r in prev])
+                    keep_msm = {r["spec"] for r in prev if (r["t_eval"], r["error"]) in front}
+            prev_n = n
+            for spec in specs:
+                solver = spec.split(":")[0]
+                if solver == "direct" and natoms > lim["direct_max_n"]:
+                    continue
+                if solver == "coulcut" and natoms > lim["coulcut_max_n"]:
+                    continue
+                if solver in ("ewald", "pppm") and not periodic:
+                    continue
+                if solver == "msm" and periodic:
+                    continue
+                if solver == "msm" and keep_msm is not None and spec not in keep_msm:
+                    continue
+                key = ("run", name, n, spec)
+                if key in done:
+                    continue
+                screen = os.path.join(args.work, "logs", f"{tag}_{spec.replace(':', '_')}.log")
+                cmd = [args.bin, "run", "--data", data, "--ref", ref, "--solver", spec,
+                       "--clump", str(clump), "--atom-style", atom_style,
+                       "--repeats", str(lim["repeats"]), "--min-time", str(lim["min_time_s"]),
+                       "--screen", screen]
+                if periodic:
+                    cmd.append("--periodic")
+                t0 = time.time()
+                st, res, msg = run_child(cmd, env, lim["timeout_s"], lim["memory_limit_mb"],
+                                         screen)
+                rec = {"kind": "run", "case": name, "n": n, "spec": spec, "solver": solver,
+                       "status": st, "message": msg, "clump": clump, "periodic": periodic,
+                       "config": case["config"], "hard": case.get("hard", ""),
+                       "wall": time.time() - t0}
+                rec.update(res or {})
+                rec["solver"] = solver
+                record(rec)
+                if st == "ok":
+                    log(f"{tag} {spec}: error {rec['error']:.2e}  eval {rec['t_eval']:.3g} s  "
+                        f"setup {rec['t_setup']:.3g} s  mem {rec['mem_mb']:.0f} MB")
+                else:
+                    log(f"{tag} {spec}: {st} {msg}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -55,8 +55,9 @@ class FixKIFMMStride : public Fix {
   Action plan(bool want_global, bool want_peratom, bool want_virial, double &energy,
               double *virial);
   double force_scale(Action a) const { return a == Action::Evaluate && mode == Mode::Impulse ? nevery : 1.0; }
-  // the kspace computes energy and virial on every evaluation, to report them later
-  bool keeps_energy() const { return nevery > 1 || auto_mode; }
+  // energy last: the kspace computes energy and virial on every evaluation, to report them on
+  // the skipped steps (energy every evaluates them when they are wanted)
+  bool keeps_energy() const { return !energy_every && (nevery > 1 || auto_mode); }
   void begin_evaluation();
   // long-range force f of local atom i at position x (before force_scale())
   void store(int i, const double *f, const double *x)

@@ -21,6 +21,9 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.abspath(os.path.join(HERE, "..", ".."))
 
 
+EXACT_SOLVERS = ("direct", "coulcut")
+
+
 def log(msg):
     print(msg, flush=True)
 
@@ -135,7 +138,8 @@ def main():
     with open(args.cases) as f:
         cfg = json.load(f)
     prof = cfg["profiles"][args.profile]
-    sets, lim = cfg["solver_sets"], cfg["limits"]
+    sets, lim = cfg["solver_sets"], dict(cfg["limits"])
+    lim.update(prof.get("limits", {}))
     for d in ("data", "ref", "logs", "operator-cache"):
         os.makedirs(os.path.join(args.work, d), exist_ok=True)
     env = dict(os.environ)
@@ -275,6 +279,28 @@ def main():
                     continue
                 key = ("run", name, n, spec)
                 if key in done:
+                    continue
+                # a setting that failed at a smaller N, or whose time at the previous N scaled
+                # as N would exceed the time limit, is not run again (recorded as skipped)
+                smaller = [r for (k, c, nn, s), r in done.items()
+                           if k == "run" and c == name and s == spec and nn < n]
+                why = ""
+                for r in smaller:
+                    if r.get("status") not in ("ok", None):
+                        why = f"{r['status']} at N = {r['n']}"
+                    elif r.get("status") == "ok" and r.get("natoms"):
+                        cost = (r["t_setup"] + 2 * r["t_eval"]) * natoms / r["natoms"]
+                        if solver in EXACT_SOLVERS:
+                            cost *= natoms / r["natoms"]
+                        if cost > lim["timeout_s"]:
+                            why = (f"predicted {cost:.0f} s from N = {r['n']} "
+                                   f"(limit {lim['timeout_s']} s)")
+                if why:
+                    record({"kind": "run", "case": name, "n": n, "spec": spec, "solver": solver,
+                            "status": "skipped", "message": why, "clump": clump,
+                            "periodic": periodic, "config": case["config"],
+                            "hard": case.get("hard", ""), "natoms": natoms})
+                    log(f"{tag} {spec}: skipped, {why}")
                     continue
                 screen = os.path.join(args.work, "logs", f"{tag}_{spec.replace(':', '_')}.log")
                 cmd = [args.bin, "run", "--data", data, "--ref", ref, "--solver", spec,

@@ -212,7 +212,7 @@ struct ScratchScreenedKernel {
 
 TEST(EngineFeatures, UserKernelWithOnlyPairEvaluation)
 {
-  Points p = plummer(10000, 10);
+  Points p = plummer(6000, 10);
   const std::size_t n = p.size();
   std::vector<double> pr(n), gr(3 * n);
   kifmm::direct_sum_t(ScratchScreenedKernel{}, n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pr.data(), gr.data());

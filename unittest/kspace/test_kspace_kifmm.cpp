@@ -13,6 +13,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <mpi.h>
 
 using namespace kifmm_test;
 
@@ -485,4 +486,50 @@ TEST_F(KSpaceKifmm, YamlReferenceGravity)
   check_force_reference(REFERENCE_DIR "/kifmm_gravity_open.yaml");
 }
 
+}    // namespace
+
+// ---------------------------------------------------------------- MPI equals serial
+// References generated on 1 rank; ctest runs these on 2, 3 and 4 ranks (label mpi).
+
+namespace {
+class MpiEqualsSerial : public KSpaceKifmm {
+ protected:
+  // a dense neutral cluster pair plus uniform atoms, 1/5 of them uncharged; written once by
+  // rank 0 so that atom IDs do not depend on the number of ranks
+  void SetUp() override
+  {
+    KSpaceKifmm::SetUp();
+    Configuration c = two_clusters(1500, 31);
+    Configuration u = uniform_cube(1500, 32);
+    for (size_t i = 0; i < u.x.size(); ++i) {
+      c.x.push_back(u.x[i]);
+      c.q.push_back(i % 5 == 0 ? 0.0 : u.q[i]);
+    }
+    for (double &q : c.q) q *= 0.001;    // gentle dynamics: atoms migrate, no chaos
+    int me = 0;
+    MPI_Comm_rank(MPI_COMM_WORLD, &me);
+    data_path = "kifmm_mpi_equals_serial.data";
+    if (me == 0) write_charge_data(data_path, c);
+    MPI_Barrier(MPI_COMM_WORLD);
+    command("variable datafile string " + data_path);
+  }
+  void TearDown() override
+  {
+    MPI_Barrier(MPI_COMM_WORLD);
+    int me = 0;
+    MPI_Comm_rank(MPI_COMM_WORLD, &me);
+    if (me != 0) data_path = "/nonexistent";    // only rank 0 removes the file
+    KSpaceKifmm::TearDown();
+  }
+};
+
+TEST_F(MpiEqualsSerial, Brick)
+{
+  check_force_reference(REFERENCE_DIR "/kifmm_mpi_clustered.yaml");
+}
+
+TEST_F(MpiEqualsSerial, Rcb)
+{
+  check_force_reference(REFERENCE_DIR "/kifmm_mpi_clustered_rcb.yaml");
+}
 }    // namespace

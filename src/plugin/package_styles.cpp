@@ -3,6 +3,7 @@
 #include "style_maps.h"
 
 #include "fix_kifmm_stride.h"
+#include "fix_clump_rigid.h"
 #include "kspace_kifmm.h"
 
 #include "lammps.h"
@@ -21,6 +22,10 @@ void *make_kspace_kifmm(void *lmp)
 void *make_fix_kifmm_stride(void *lmp, int narg, char **arg)
 {
   return new FixKIFMMStride(static_cast<LAMMPS *>(lmp), narg, arg);
+}
+void *make_fix_clump_rigid(void *lmp, int narg, char **arg)
+{
+  return new FixClumpRigid(static_cast<LAMMPS *>(lmp), narg, arg);
 }
 }    // namespace
 
@@ -45,6 +50,8 @@ const std::vector<lammpsplugin_t> &package_styles()
         .creator.v1 = &make_kspace_kifmm;
     add("fix", "kifmm/stride", "long-range forces of kspace kifmm refreshed every N steps")
         .creator.v2 = &make_fix_kifmm_stride;
+    add("fix", "clump/rigid", "rigid clumps of spherical pebbles (union mass, wraps rigid/small)")
+        .creator.v2 = &make_fix_clump_rigid;
     return v;
   }();
   return styles;

@@ -172,7 +172,59 @@ void KSpaceKIFMM::init()
   }
 }
 
-void KSpaceKIFMM::setup() {}
+void KSpaceKIFMM::setup()
+{
+  warned_coincident = false;
+  // memory the evaluations may use (read once per run; see check_memory)
+  memory_limit_mb = 0;
+  if (const char *env = std::getenv("KIFMM_MEMORY_LIMIT_MB")) {
+    memory_limit_mb = std::atof(env);
+  } else if (FILE *fp = fopen("/proc/meminfo", "r")) {
+    char line[256];
+    while (fgets(line, sizeof(line), fp))
+      if (strncmp(line, "MemAvailable:", 13) == 0) memory_limit_mb = std::atof(line + 13) / 1024.0;
+    fclose(fp);
+  }
+}
+
+// Pairs at zero distance are excluded from the sum (never inf); say so once per run.
+void KSpaceKIFMM::report_coincident_pairs(std::size_t local_pairs)
+{
+  if (warned_coincident) return;
+  bigint mine = (bigint) local_pairs, total = 0;
+  MPI_Allreduce(&mine, &total, 1, MPI_LMP_BIGINT, MPI_SUM, world);
+  if (total == 0) return;
+  warned_coincident = true;
+  if (comm->me == 0)
+    error->warning(FLERR,
+                   "kspace_style kifmm: {} source-target pairs of atoms at zero distance are "
+                   "excluded from the long-range sum (step {})",
+                   total, update->ntimestep);
+}
+
+// Refuse an evaluation whose memory estimate exceeds what the machine has, with the estimate,
+// instead of failing inside the allocator. The limit is MemAvailable from /proc/meminfo, or
+// KIFMM_MEMORY_LIMIT_MB when set (both read in setup()).
+void KSpaceKIFMM::check_memory(std::size_t nsources)
+{
+  const double p = engine_options.order, m = std::max(1, engine_options.leaf_size);
+  const double leaves = std::max(1.0, (double) nsources / (0.5 * m));
+  // per point: coordinates, strength, sort keys, gradients, potential, target copies (~30
+  // doubles); per cell: up/down equivalent densities and check values, the FFT of the
+  // upward density and the M2L accumulation ((2p)^3 complex each); operators as reported
+  const double surface = 6.0 * (p - 1) * (p - 1) + 2.0, grid = 8.0 * p * p * p;
+  const double bytes = 30.0 * 8.0 * (double) nsources + leaves * 8.0 / 7.0 *
+      (4.0 * surface * 8.0 + 2.0 * grid * 16.0) + (double) engine->stats().operator_bytes;
+  const double need_mb = bytes / 1048576.0;
+  const double limit_mb = memory_limit_mb;
+  int refuse = limit_mb > 0 && need_mb > limit_mb, any = 0;
+  MPI_Allreduce(&refuse, &any, 1, MPI_INT, MPI_MAX, world);
+  if (any)
+    error->all(FLERR,
+               "kspace_style kifmm: estimated memory {:.0f} MB for {} atoms at order {} exceeds "
+               "the {:.0f} MB available on a rank; use fewer atoms per rank or a lower accuracy",
+               need_mb, nsources, engine_options.order, limit_mb);
+}
 
 void KSpaceKIFMM::gather_points()
 {
@@ -263,6 +315,7 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   const std::size_t nsrc = source_strength().size();
   const double *sx = source_xyz().data(), *ss = source_strength().data();
 
+  check_memory(nsrc);
   const bool want_potential = eflag_global || eflag_atom || keep;
   pot.assign(want_potential ? n : 0, 0.0);
   grad.assign(3 * n, 0.0);
@@ -317,6 +370,7 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   }
 
   if (!reported_first_evaluation) report_first_evaluation();
+  report_coincident_pairs(nsrc > 0 ? engine->stats().coincident_pairs : 0);
   if (kset.check_every > 0 && update->ntimestep % kset.check_every == 0) check_error();
 }
 

@@ -35,6 +35,8 @@ class KSpaceKIFMM : public KSpace {
   double estimated_error = 0.0;
   double last_measured_error = -1.0;
   bool reported_first_evaluation = false;
+  bool warned_coincident = false;
+  double memory_limit_mb = 0;    // 0 = unknown: no check
 
   // atoms of nonzero strength, reused between calls
   std::vector<int> index;              // local atom index of each point
@@ -54,6 +56,8 @@ class KSpaceKIFMM : public KSpace {
   void per_atom_virial(double prefactor, double center[3]);
   void check_error();
   void report_first_evaluation();
+  void report_coincident_pairs(std::size_t local_pairs);
+  void check_memory(std::size_t nsources);
 
   // fix kifmm/stride attaches itself at its init (after this init, which detaches it)
   class FixKIFMMStride *stride = nullptr;

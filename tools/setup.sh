@@ -9,6 +9,7 @@ packages=(
   libopenmpi-dev openmpi-bin
   libfftw3-dev libeigen3-dev libfmt-dev libgtest-dev
   python3 python3-matplotlib python3-numpy
+  clang libclang-rt-dev
 )
 # extra packages for optional tools: KIFMM_SETUP_EXTRA="valgrind clang ..."
 if [ -n "${KIFMM_SETUP_EXTRA:-}" ]; then

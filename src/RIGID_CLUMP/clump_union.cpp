@@ -60,6 +60,7 @@ struct Cell {
   double u0, u1, v0, v1;
   Q q;         // rule on the cell
   Q qc;        // sum of the rules on its four children
+  Q qch[4];    // the children's rules (reused when the cell is split)
   double err;
 };
 
@@ -188,12 +189,21 @@ double PieceIntegrator::cap_info(int face, double u0, double u1, double v0, doub
 void PieceIntegrator::push(int face, int depth, double u0, double u1, double v0, double v1,
                            const Q &q, double parent_err)
 {
-  Cell cell{face, depth, u0, u1, v0, v1, q, Q(), 0.0};
+  Cell cell;
+  cell.face = face;
+  cell.depth = depth;
+  cell.u0 = u0;
+  cell.u1 = u1;
+  cell.v0 = v0;
+  cell.v1 = v1;
+  cell.q = q;
   const double um = 0.5 * (u0 + u1), vm = 0.5 * (v0 + v1);
-  cell.qc.add(rule(face, u0, um, v0, vm));
-  cell.qc.add(rule(face, um, u1, v0, vm));
-  cell.qc.add(rule(face, u0, um, vm, v1));
-  cell.qc.add(rule(face, um, u1, vm, v1));
+  // children in the order a (u half) * 2 + b (v half)
+  cell.qch[0] = rule(face, u0, um, v0, vm);
+  cell.qch[1] = rule(face, u0, um, vm, v1);
+  cell.qch[2] = rule(face, um, u1, v0, vm);
+  cell.qch[3] = rule(face, um, u1, vm, v1);
+  for (int c = 0; c < 4; ++c) cell.qc.add(cell.qch[c]);
   // estimate from the volume, the first moments and the trace of the second moments, so
   // that an accidental agreement of one of them does not hide the error
   const double r = p_.r;
@@ -221,7 +231,7 @@ void PieceIntegrator::push(int face, int depth, double u0, double u1, double v0,
   cell.err = e;
   total_.add(cell.qc);
   error_ += cell.err;
-  heap_.push_back(cell);
+  heap_.push_back(std::move(cell));
   std::push_heap(heap_.begin(), heap_.end(),
                  [](const Cell &a, const Cell &b) { return a.err < b.err; });
 }
@@ -242,7 +252,7 @@ double PieceIntegrator::run(double rel_tol, double abs_floor, Q &out, long &ncel
   std::vector<Cell> done;
   while (!heap_.empty() && error_ > tol_abs) {
     std::pop_heap(heap_.begin(), heap_.end(), cmp);
-    Cell cell = heap_.back();
+    Cell cell = std::move(heap_.back());
     heap_.pop_back();
     if (cell.depth >= max_depth) {
       done.push_back(cell);
@@ -256,7 +266,7 @@ double PieceIntegrator::run(double rel_tol, double abs_floor, Q &out, long &ncel
     for (int a = 0; a < 2; ++a)
       for (int b = 0; b < 2; ++b)
         push(cell.face, cell.depth + 1, ub[a][0], ub[a][1], vb[b][0], vb[b][1],
-             rule(cell.face, ub[a][0], ub[a][1], vb[b][0], vb[b][1]), cell.err);
+             cell.qch[a * 2 + b], cell.err);
   }
   // sums afresh (the running sums accumulate rounding)
   out = Q();

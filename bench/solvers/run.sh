@@ -8,13 +8,14 @@
 #   bash bench/solvers/run.sh --tiny     the smoke test's inputs (seconds)
 # Options: --out DIR (results + plots), --doc FILE (report), --build DIR, --bin PATH (no build),
 #   --only CASE[,CASE], --max-n N, --force (rerun what the results file has), --report-only,
-#   --threads T (OMP_NUM_THREADS of the runs, default 1).
+#   --threads T (OMP_NUM_THREADS of the runs, default 1), --commit C (source commit of --bin,
+#   recorded in the results; default: this checkout's HEAD, "+dirty" if src/ has changes).
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
 profile=full
 build="${KIFMM_BUILD_DIR:-/work/build-bench}"
-out="" doc="" bin="" only="" maxn="" force="" report_only=0
+out="" doc="" bin="" only="" maxn="" force="" report_only=0 commit=""
 threads="${OMP_NUM_THREADS:-1}"
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -29,6 +30,7 @@ while [ $# -gt 0 ]; do
     --threads) threads="$2"; shift ;;
     --force) force=--force ;;
     --report-only) report_only=1 ;;
+    --commit) commit="$2"; shift ;;
     *) echo "run.sh: unknown option $1" >&2; exit 2 ;;
   esac
   shift
@@ -58,9 +60,13 @@ if [ "$report_only" = 0 ]; then
     make -C "$build" -j2 bench_solvers >/dev/null
     bin="$build/bench_solvers"
   fi
+  if [ -z "$commit" ]; then
+    commit="$(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)"
+    if [ -n "$(git -C "$root" status --porcelain -- src 2>/dev/null)" ]; then commit="$commit+dirty"; fi
+  fi
   export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
   "$py" "$here/run_bench.py" --profile "$profile" --bin "$bin" --work "$work" \
-    --results "$out/results.jsonl" --threads "$threads" ${only:+--only "$only"} \
+    --results "$out/results.jsonl" --threads "$threads" --commit "$commit" ${only:+--only "$only"} \
     ${maxn:+--max-n "$maxn"} $force
 fi
 "$py" "$here/report.py" --profile "$profile" --results "$out/results.jsonl" --plots "$out" \

@@ -133,6 +133,7 @@ def main():
     ap.add_argument("--max-n", type=float, default=0, help="skip N above this")
     ap.add_argument("--force", action="store_true", help="rerun runs already in the results")
     ap.add_argument("--threads", default=os.environ.get("OMP_NUM_THREADS", "1"))
+    ap.add_argument("--commit", default="", help="source commit of the binary (recorded)")
     args = ap.parse_args()
 
     with open(args.cases) as f:
@@ -150,7 +151,7 @@ def main():
     done = {} if args.force else load_results(args.results)
     only = set(filter(None, args.only.split(",")))
     common = {"profile": args.profile, "omp_threads_env": str(args.threads),
-              "host_cpus": os.cpu_count()}
+              "host_cpus": os.cpu_count(), "commit": args.commit}
 
     def record(rec):
         rec.update(common)
@@ -158,32 +159,37 @@ def main():
         append_result(args.results, rec)
         done[(rec.get("kind"), rec.get("case"), rec.get("n"), rec.get("spec"))] = rec
 
-    # operator setup cost per order: cold (no cache) and the warm-up that fills the cache the
-    # later runs read, on 1000 uniform atoms
+    # operator setup cost per order, on N uniform atoms (enough for a tree of several levels
+    # at every order): first a run that fills the operator cache the later runs read
+    # (kind setup_fill), then the cold setup without cache and the warm one from the cache
     orders = prof.get("setup_orders", [])
+    setup_n = int(prof.get("setup_n", 100000))
     if orders and (not only or "setup" in only):
-        data = os.path.join(args.work, "data", "setup_uniform_1000.data")
-        ref = os.path.join(args.work, "ref", "setup_uniform_1000.ref")
+        data = os.path.join(args.work, "data", f"setup_uniform_{setup_n}.data")
+        ref = os.path.join(args.work, "ref", f"setup_uniform_{setup_n}.ref")
         if not os.path.exists(ref):
-            subprocess.run([args.bin, "gen", "--config", "uniform", "--n", "1000", "--seed", "1",
-                            "--out", data], check=True, env=env, stdout=subprocess.DEVNULL)
-            subprocess.run([args.bin, "ref", "--data", data, "--out", ref], check=True, env=env,
+            subprocess.run([args.bin, "gen", "--config", "uniform", "--n", str(setup_n),
+                            "--seed", "1", "--out", data], check=True, env=env,
                            stdout=subprocess.DEVNULL)
+            subprocess.run([args.bin, "ref", "--data", data, "--out", ref, "--sample", "2000"],
+                           check=True, env=env, stdout=subprocess.DEVNULL)
         for p in orders:
-            for spec in (f"kifmm:order={p}:cache=none", f"kifmm:order={p}"):
-                key = ("setup", "setup", 1000, spec)
+            for kind, spec in (("setup_fill", f"kifmm:order={p}"),
+                               ("setup", f"kifmm:order={p}:cache=none"),
+                               ("setup", f"kifmm:order={p}")):
+                key = (kind, "setup", setup_n, spec)
                 if key in done:
                     continue
-                screen = os.path.join(args.work, "logs", f"setup_{spec.replace(':', '_')}.log")
+                screen = os.path.join(args.work, "logs", f"{kind}_{spec.replace(':', '_')}.log")
                 st, res, msg = run_child([args.bin, "run", "--data", data, "--ref", ref,
-                                          "--solver", spec, "--min-time", "0.2", "--screen",
-                                          screen], env, lim["timeout_s"],
+                                          "--solver", spec, "--min-time", "0.2", "--repeats",
+                                          "1", "--screen", screen], env, lim["timeout_s"],
                                          lim["memory_limit_mb"], screen)
-                rec = {"kind": "setup", "case": "setup", "n": 1000, "spec": spec, "status": st,
+                rec = {"kind": kind, "case": "setup", "n": setup_n, "spec": spec, "status": st,
                        "message": msg}
                 rec.update(res or {})
                 record(rec)
-                log(f"setup {spec}: {st} setup {rec.get('t_setup', float('nan')):.3g} s")
+                log(f"{kind} {spec}: {st} setup {rec.get('t_setup', float('nan')):.3g} s")
 
     for case in prof["cases"]:
         name = case["name"]

@@ -242,6 +242,24 @@ TEST(EngineFeatures, YukawaWithZeroKappaEqualsLaplace)
   EXPECT_LT(rel_l2(gy, gl), 1e-9);
 }
 
+TEST(EngineFeatures, YukawaOperatorsAreReusedWhenTheBoxChanges)
+{
+  // the root is rounded to a power of two for size-dependent kernels: a slightly expanded and
+  // shifted configuration needs no new operators
+  Points p = uniform_cube(6000, 15, 0.8);
+  kifmm::Options o = opts(6, 64);
+  auto ev = kifmm::make_evaluator(KernelSpec{KernelType::Yukawa, 2.5}, o);
+  std::vector<double> pot(p.size()), g(3 * p.size());
+  ev->evaluate(p.size(), p.xyz.data(), p.q.data(), p.size(), p.xyz.data(), pot.data(), g.data());
+  for (double &x : p.xyz) x = 1.03 * x + 0.01;
+  auto c0 = kifmm::operator_cache_counters();
+  auto ev2 = kifmm::make_evaluator(KernelSpec{KernelType::Yukawa, 2.5}, o);
+  Errors e = fmm_errors(*ev2, p);
+  EXPECT_EQ(kifmm::operator_cache_counters().computed, c0.computed);
+  EXPECT_EQ(ev2->stats().t_precompute, 0.0);
+  EXPECT_LT(e.grad, 2e-5);
+}
+
 TEST(EngineFeatures, ChooseOrderMeetsRequestedAccuracy)
 {
   int prev_order = 0;

@@ -470,6 +470,10 @@ void FmmEvaluator<K>::evaluate(std::size_t n_src, const double *src_xyz, const d
     root.half_width = opt_.root_half_width;
   } else {
     root = bounding_cube(ns, sxyz, n_trg, trg_xyz);
+    // Kernels whose operators depend on the box size (Yukawa: kappa * h): round the root
+    // half-width up to a power of two, so that boxes of every level come from a fixed
+    // ladder of sizes and operator sets are reused when the points move between calls.
+    if (!level_independent_operators<K>()) root.half_width = std::exp2(std::ceil(std::log2(root.half_width)));
   }
   build_octree(tree_, root, ns, sxyz, n_trg, trg_xyz, opt_.leaf_size, opt_.max_depth);
   // sorted structure-of-arrays copies

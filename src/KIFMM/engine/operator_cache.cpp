@@ -35,10 +35,31 @@ std::mutex &cache_mutex()
   static std::mutex m;
   return m;
 }
-std::map<std::pair<std::string, int>, std::shared_ptr<const OperatorSet>> &memory_cache()
+struct Entry {
+  std::shared_ptr<const OperatorSet> op;
+  unsigned long last_use = 0;
+};
+std::map<std::pair<std::string, int>, Entry> &memory_cache()
 {
-  static std::map<std::pair<std::string, int>, std::shared_ptr<const OperatorSet>> c;
+  static std::map<std::pair<std::string, int>, Entry> c;
   return c;
+}
+unsigned long g_clock = 0;
+constexpr std::size_t kMemoryBudget = std::size_t(1) << 30;    // bytes kept by the cache itself
+
+// Drop least recently used sets while over budget (evaluators keep theirs alive).
+void evict()
+{
+  auto &mc = memory_cache();
+  std::size_t total = 0;
+  for (auto &e : mc) total += e.second.op->bytes();
+  while (total > kMemoryBudget && mc.size() > 1) {
+    auto oldest = mc.begin();
+    for (auto it = mc.begin(); it != mc.end(); ++it)
+      if (it->second.last_use < oldest->second.last_use) oldest = it;
+    total -= oldest->second.op->bytes();
+    mc.erase(oldest);
+  }
 }
 
 OperatorCacheCounters g_counters;
@@ -156,7 +177,10 @@ std::shared_ptr<const OperatorSet> get_operator_set(const UnitKernel &k, int p, 
   auto &mc = memory_cache();
   const auto key = std::make_pair(k.id, p);
   auto it = mc.find(key);
-  if (it != mc.end()) return it->second;
+  if (it != mc.end()) {
+    it->second.last_use = ++g_clock;
+    return it->second.op;
+  }
   const auto t0 = std::chrono::steady_clock::now();
   std::shared_ptr<OperatorSet> op;
   std::string path;
@@ -170,7 +194,8 @@ std::shared_ptr<const OperatorSet> get_operator_set(const UnitKernel &k, int p, 
     ++g_counters.computed;
     if (!path.empty() && write_operator_file(path, *op)) ++g_counters.disk_writes;    // best effort
   }
-  mc[key] = op;
+  mc[key] = Entry{op, ++g_clock};
+  evict();
   if (t_setup) *t_setup += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return op;
 }

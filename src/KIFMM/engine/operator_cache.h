@@ -1,4 +1,5 @@
-// Process-wide cache of operator sets, keyed by (unit kernel id, order), thread-safe, with an
+// Process-wide cache of operator sets, keyed by (unit kernel id, order), thread-safe (least
+// recently used sets are dropped beyond 1 GiB; evaluators keep the sets they use), with an
 // optional on-disk copy: <cache_dir>/kifmm_ops_v<version>_<id>_p<order>.bin. A file is used
 // only if its header (magic, version, id, order, sizes) matches and its checksum is right;
 // otherwise it is recomputed and rewritten (written to a temporary name, then renamed).

@@ -1,0 +1,64 @@
+#!/usr/bin/env python3
+"""Run the quick variant of one example scene in a temporary copy of its directory, then its
+outcome checker on the outputs.
+
+usage: run_example.py --lmp LMP --example DIR --checker CHECK.py [--keep] [-- checker args]
+
+The copy leaves out an existing out/ directory. The input is run as
+    LMP -in in.<scene> -var quick 1 -var potentials <repo>/potentials -log out/log.lammps
+        -nocite -screen none
+(OMP_NUM_THREADS is taken from the environment; ctest sets 1). Then CHECK.py <copy>/out is
+run; its exit status is the test's. The copy is removed on success and kept (path printed)
+on failure or with --keep.
+"""
+import argparse
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--lmp", required=True)
+    ap.add_argument("--example", required=True)
+    ap.add_argument("--checker", required=True)
+    ap.add_argument("--keep", action="store_true")
+    ap.add_argument("checker_args", nargs="*")
+    a = ap.parse_args()
+
+    example = os.path.abspath(a.example)
+    scene = os.path.basename(example.rstrip("/"))
+    repo = os.path.dirname(os.path.dirname(example))
+    work = tempfile.mkdtemp(prefix=f"example-{scene}-")
+    copy = os.path.join(work, scene)
+    shutil.copytree(example, copy, ignore=shutil.ignore_patterns("out", "__pycache__"))
+    os.makedirs(os.path.join(copy, "out"), exist_ok=True)
+    cmd = [a.lmp, "-in", f"in.{scene}", "-var", "quick", "1",
+           "-var", "potentials", os.path.join(repo, "potentials"),
+           "-log", "out/log.lammps", "-nocite", "-screen", "none"]
+    print("running:", " ".join(cmd), "in", copy, flush=True)
+    t0 = time.time()
+    run = subprocess.run(cmd, cwd=copy)
+    print(f"lammps exit status {run.returncode}, wall time {time.time() - t0:.1f} s", flush=True)
+    ok = run.returncode == 0
+    if not ok:
+        log = os.path.join(copy, "out", "log.lammps")
+        if os.path.exists(log):
+            with open(log) as f:
+                tail = f.read().splitlines()[-30:]
+            print("\n".join(tail))
+    else:
+        chk = subprocess.run([sys.executable, a.checker, os.path.join(copy, "out")] + a.checker_args)
+        ok = chk.returncode == 0
+    if ok and not a.keep:
+        shutil.rmtree(work, ignore_errors=True)
+    else:
+        print("outputs kept in", copy)
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,9 +1,27 @@
 #!/usr/bin/env bash
 # README command (b): install what is missing, build, run the whole test suite with ctest
-# (MPI tests run under mpirun --oversubscribe; root is allowed through OMPI's variables).
+# (MPI tests run under mpirun --oversubscribe; root is allowed through OMPI's variables),
+# then the engine's unit tests again in an AddressSanitizer + UndefinedBehaviorSanitizer build
+# (skip that stage with KIFMM_SKIP_SANITIZERS=1).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${KIFMM_BUILD_DIR:-$root/build}"
 bash "$root/tools/build.sh"
+
+status=0
+if [ "${KIFMM_SKIP_SANITIZERS:-0}" != "1" ]; then
+  echo "== engine unit tests under ASan + UBSan =="
+  asan="${build}-asan"
+  cmake -S "$root" -B "$asan" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DKIFMM_ENGINE_ONLY=ON \
+        -DKIFMM_SANITIZE=ON >/dev/null
+  cmake --build "$asan" -j "${KIFMM_JOBS:-$(nproc)}"
+  (cd "$asan" && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
+     UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 OMP_NUM_THREADS=2 \
+     ctest --output-on-failure -j "${KIFMM_TEST_JOBS:-2}" -L engine -E "${KIFMM_ASAN_EXCLUDE:-Benchmark}") \
+    || status=1
+fi
+
+echo "== full test suite =="
 cd "$build"
-ctest --output-on-failure -j "${KIFMM_TEST_JOBS:-2}" ${KIFMM_CTEST_ARGS:-}
+ctest --output-on-failure -j "${KIFMM_TEST_JOBS:-2}" ${KIFMM_CTEST_ARGS:-} || status=1
+exit $status

@@ -177,3 +177,24 @@ TEST_F(HardCases, HighOrdersKeepImproving)
 }
 
 }    // namespace
+
+namespace {
+
+TEST_F(HardCases, TriclinicBoxIsAClearError)
+{
+  commands("units lj\natom_style charge\nboundary f f f\n"
+           "region box prism 0 1 0 1 0 1 0.1 0 0\ncreate_box 1 box\nmass 1 1.0\n"
+           "create_atoms 1 single 0.5 0.5 0.5\npair_style zero 0.01\npair_coeff * *\n"
+           "kspace_style kifmm 1e-4");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "kifmm does not support triclinic boxes");
+}
+
+TEST_F(HardCases, NonFiniteCoordinateStopsTheRunWithAnError)
+{
+  box("create_atoms 1 single 0.2 0.2 0.2\ncreate_atoms 1 single 0.7 0.7 0.7\n"
+      "set group all charge 1.0\nkspace_style kifmm 1e-4\nrun 0 post no");
+  lmp->atom->x[1][0] = NAN;
+  EXPECT_LAMMPS_ERROR(command("run 1 post no"), "ERROR.*(Non-numeric|non-finite)");
+}
+
+}    // namespace

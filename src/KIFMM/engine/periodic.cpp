@@ -1,0 +1,497 @@
+#include "periodic.h"
+
+#include "surface.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <complex>
+#include <map>
+#include <mutex>
+#include <stdexcept>
+
+namespace kifmm {
+
+// ------------------------------------------------------------------------------ lists
+
+std::size_t PeriodicImageLists::bytes() const
+{
+  std::size_t b = V_shift.capacity();
+  for (const ImageList *l : {&U, &W, &X})
+    b += (l->off.capacity() + l->idx.capacity()) * sizeof(int) + l->shift.capacity();
+  return b;
+}
+
+void colleague_shift(const Cell &c, int slot, int shift[3])
+{
+  const int d[3] = {slot / 9 - 1, (slot / 3) % 3 - 1, slot % 3 - 1};
+  const int a[3] = {c.ix, c.iy, c.iz};
+  const long long n = 1LL << c.level;
+  for (int k = 0; k < 3; ++k) {
+    const long long g = a[k] + d[k];
+    shift[k] = g < 0 ? -1 : (g >= n ? 1 : 0);
+  }
+}
+
+namespace {
+
+struct Entry {
+  int cell;
+  signed char s[3];
+};
+
+// Closed cells a (shifted by sa root periods) and b (unshifted) touch or overlap.
+bool adjacent_img(const Cell &a, const signed char sa[3], const Cell &b)
+{
+  const int lf = std::max(a.level, b.level);
+  const int64_t ka = int64_t(1) << (lf - a.level), kb = int64_t(1) << (lf - b.level);
+  const int64_t period = int64_t(1) << lf;
+  const int64_t ax[3] = {a.ix, a.iy, a.iz}, bx[3] = {b.ix, b.iy, b.iz};
+  for (int d = 0; d < 3; ++d) {
+    const int64_t alo = ax[d] * ka + sa[d] * period, ahi = alo + ka;
+    const int64_t blo = bx[d] * kb, bhi = blo + kb;
+    if (alo > bhi || blo > ahi) return false;
+  }
+  return true;
+}
+
+bool zero_shift(const signed char s[3])
+{
+  return s[0] == 0 && s[1] == 0 && s[2] == 0;
+}
+
+void flatten_plain(const std::vector<std::vector<int>> &rows, CellList &out)
+{
+  out.off.assign(rows.size() + 1, 0);
+  for (std::size_t i = 0; i < rows.size(); ++i) out.off[i + 1] = out.off[i] + (int) rows[i].size();
+  out.idx.resize(out.off.back());
+  for (std::size_t i = 0; i < rows.size(); ++i) std::copy(rows[i].begin(), rows[i].end(), out.idx.begin() + out.off[i]);
+}
+
+// Split rows of entries: shift 0 -> plain (sorted by cell, as the free-space lists), others
+// -> image list (in build order, deterministic).
+void split(const std::vector<std::vector<Entry>> &rows, CellList &plain, ImageList &img, bool sort_plain)
+{
+  const std::size_t n = rows.size();
+  std::vector<std::vector<int>> p(n);
+  img.off.assign(n + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    int ni = 0;
+    for (const Entry &e : rows[i]) {
+      if (zero_shift(e.s)) p[i].push_back(e.cell);
+      else ++ni;
+    }
+    if (sort_plain) std::sort(p[i].begin(), p[i].end());
+    img.off[i + 1] = img.off[i] + ni;
+  }
+  img.idx.resize(img.off.back());
+  img.shift.resize(3 * (std::size_t) img.off.back());
+  for (std::size_t i = 0; i < n; ++i) {
+    int k = img.off[i];
+    for (const Entry &e : rows[i])
+      if (!zero_shift(e.s)) {
+        img.idx[k] = e.cell;
+        std::copy(e.s, e.s + 3, &img.shift[3 * (std::size_t) k]);
+        ++k;
+      }
+  }
+  flatten_plain(p, plain);
+}
+
+}    // namespace
+
+void build_periodic_interaction_lists(const Octree &tree, InteractionLists &lists, PeriodicImageLists &images)
+{
+  const auto &cells = tree.cells;
+  const int n = (int) cells.size();
+  lists.colleagues.assign(n, {});
+  for (auto &c : lists.colleagues) c.fill(-1);
+  std::vector<std::vector<Entry>> U(n), W(n), X(n), V(n), coarse_adj(n);
+  if (n == 0) return;
+  lists.colleagues[0].fill(0);    // the root's neighbors are its own images
+
+  const int nlev = (int) tree.level_begin.size() - 1;
+  for (int l = 1; l < nlev; ++l) {
+#pragma omp parallel for schedule(dynamic, 16) if (tree.level_begin[l + 1] - tree.level_begin[l] > 512)
+    for (int b = tree.level_begin[l]; b < tree.level_begin[l + 1]; ++b) {
+      const Cell &B = cells[b];
+      const int p = B.parent;
+      const Cell &P = cells[p];
+      auto &col = lists.colleagues[b];
+      const int64_t period = int64_t(1) << l;
+      for (int s = 0; s < 27; ++s) {
+        const int pc = lists.colleagues[p][s];
+        if (pc < 0) continue;
+        int ps[3];
+        colleague_shift(P, s, ps);
+        const Cell &C = cells[pc];
+        for (int k = 0; k < C.n_children; ++k) {
+          const int d = C.first_child + k;
+          const Cell &D = cells[d];
+          const int64_t dx = D.ix + ps[0] * period - B.ix, dy = D.iy + ps[1] * period - B.iy,
+                        dz = D.iz + ps[2] * period - B.iz;
+          if (dx >= -1 && dx <= 1 && dy >= -1 && dy <= 1 && dz >= -1 && dz <= 1)
+            col[(dx + 1) * 9 + (dy + 1) * 3 + (dz + 1)] = d;
+          else if (D.n_src() > 0 && B.n_trg() > 0)
+            V[b].push_back({d, {(signed char) ps[0], (signed char) ps[1], (signed char) ps[2]}});
+        }
+      }
+      auto consider = [&](const Entry &a) {
+        if (adjacent_img(cells[a.cell], a.s, B)) coarse_adj[b].push_back(a);
+        else if (B.n_trg() > 0) X[b].push_back(a);
+      };
+      for (const Entry &a : coarse_adj[p]) consider(a);
+      for (int s = 0; s < 27; ++s) {
+        const int pc = lists.colleagues[p][s];
+        if (s == 13 || pc < 0) continue;
+        if (cells[pc].leaf() && cells[pc].n_src() > 0) {
+          int ps[3];
+          colleague_shift(P, s, ps);
+          consider({pc, {(signed char) ps[0], (signed char) ps[1], (signed char) ps[2]}});
+        }
+      }
+    }
+  }
+#pragma omp parallel for schedule(dynamic, 16) if (tree.leaves.size() > 512)
+  for (int li = 0; li < (int) tree.leaves.size(); ++li) {
+    const int b = tree.leaves[li];
+    const Cell &B = cells[b];
+    if (B.n_trg() == 0) continue;
+    auto &u = U[b];
+    for (const Entry &a : coarse_adj[b]) u.push_back(a);
+    std::vector<Entry> stack;
+    for (int s = 0; s < 27; ++s) {
+      const int c = lists.colleagues[b][s];
+      if (c < 0 || cells[c].n_src() == 0) continue;
+      int cs[3];
+      colleague_shift(B, s, cs);
+      const Entry e{c, {(signed char) cs[0], (signed char) cs[1], (signed char) cs[2]}};
+      if (cells[c].leaf()) u.push_back(e);
+      else stack.push_back(e);
+    }
+    while (!stack.empty()) {
+      const Entry e = stack.back();
+      stack.pop_back();
+      const Cell &C = cells[e.cell];
+      for (int k = 0; k < C.n_children; ++k) {
+        const Entry d{C.first_child + k, {e.s[0], e.s[1], e.s[2]}};
+        const Cell &D = cells[d.cell];
+        if (D.n_src() == 0) continue;
+        if (!adjacent_img(D, d.s, B)) W[b].push_back(d);
+        else if (D.leaf()) u.push_back(d);
+        else stack.push_back(d);
+      }
+    }
+  }
+  split(U, lists.U, images.U, true);
+  split(W, lists.W, images.W, true);
+  split(X, lists.X, images.X, false);
+  // V: all entries in the plain list (M2L takes the geometry from the colleague slot)
+  std::vector<std::vector<int>> v(n);
+  images.V_shift.clear();
+  for (int i = 0; i < n; ++i)
+    for (const Entry &e : V[i]) {
+      v[i].push_back(e.cell);
+      images.V_shift.insert(images.V_shift.end(), e.s, e.s + 3);
+    }
+  flatten_plain(v, lists.V);
+}
+
+void wrap_into_cell(std::size_t n, const double *xyz, const double center[3], double h, std::vector<double> &out)
+{
+  out.resize(3 * n);
+  const double L = 2.0 * h;
+#pragma omp parallel for schedule(static) if (n > 100000)
+  for (std::size_t i = 0; i < n; ++i)
+    for (int d = 0; d < 3; ++d) {
+      const double lo = center[d] - h;
+      double x = xyz[3 * i + d];
+      if (x < lo || x >= lo + L) {
+        x -= L * std::floor((x - lo) / L);
+        if (x >= lo + L) x -= L;    // rounding
+        if (x < lo) x = lo;
+      }
+      out[3 * i + d] = x;
+    }
+}
+
+// ------------------------------------------------------------------------------ Green's functions
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kSqrtPi = 1.77245385090551602729;
+constexpr double kPeriod = 2.0;                    // unit cell: half-width 1
+constexpr double kVolume = 8.0;
+
+// Ewald split (or direct image sum) of the unit-cell lattice sum of one kernel.
+struct Split {
+  bool yukawa = false, direct = false;
+  double kappa = 0, alpha = 3.0, a = 0;    // a = kappa / (2 alpha)
+  int nreal = 2, kmax = 13;
+
+  explicit Split(const KernelSpec &k)
+  {
+    yukawa = k.type == KernelType::Yukawa;
+    kappa = yukawa ? k.kappa : 0.0;
+    // images beyond |n| = 2 are > 3.9 away: exp(-kappa 3.9) < 1e-17 for kappa >= 10
+    direct = yukawa && kappa >= 10.0;
+    a = kappa / (2 * alpha);
+  }
+  double bare(double r) const { return yukawa ? std::exp(-kappa * r) / r : 1.0 / r; }
+  // real-space term phi(r) and F = phi'(r)/r; reg = phi minus the bare kernel
+  void real(double r, bool reg, double &v, double &F) const
+  {
+    if (direct) {    // only used with reg = false
+      const double e = std::exp(-kappa * r);
+      v = e / r;
+      F = -e * (1 + kappa * r) / (r * r * r);
+      return;
+    }
+    const double ar = alpha * r;
+    const double gauss = (2 * alpha / kSqrtPi) * std::exp(-ar * ar - a * a);
+    if (!yukawa) {
+      if (reg) {
+        v = -std::erf(ar) / r;
+        F = (std::erf(ar) / (r * r) - gauss / r) / r;
+      } else {
+        v = std::erfc(ar) / r;
+        F = (-std::erfc(ar) / (r * r) - gauss / r) / r;
+      }
+      return;
+    }
+    const double A = std::exp(kappa * r) * std::erfc(ar + a);
+    if (reg) {
+      const double C = std::exp(-kappa * r) * std::erfc(a - ar);
+      v = (A - C) / (2 * r);
+      F = ((kappa * (A + C) - 2 * gauss) / (2 * r) - (A - C) / (2 * r * r)) / r;
+    } else {
+      const double B = std::exp(-kappa * r) * std::erfc(ar - a);
+      v = (A + B) / (2 * r);
+      F = ((kappa * (A - B) - 2 * gauss) / (2 * r) - (A + B) / (2 * r * r)) / r;
+    }
+  }
+  // limit of the regular n = 0 term at r = 0
+  double reg0() const
+  {
+    if (direct) return 0.0;
+    if (!yukawa) return -2 * alpha / kSqrtPi;
+    return kappa * std::erfc(a) - (2 * alpha / kSqrtPi) * std::exp(-a * a);
+  }
+  // reciprocal weight of k = pi m (m integer vector), m2 = |m|^2
+  double weight(int m2) const
+  {
+    if (direct) return 0.0;
+    const double k2 = kPi * kPi * m2;
+    if (!yukawa) return m2 == 0 ? 0.0 : (4 * kPi / kVolume) * std::exp(-k2 / (4 * alpha * alpha)) / k2;
+    const double q2 = k2 + kappa * kappa;
+    return (4 * kPi / kVolume) * std::exp(-q2 / (4 * alpha * alpha)) / q2;
+  }
+  double background() const { return (yukawa || direct) ? 0.0 : -kPi / (kVolume * alpha * alpha); }
+};
+
+// Real-space part at r over images |n|_inf <= nreal; `regular`: the n = 0 term without the
+// bare kernel (limit at r = 0); `near_regular`: every |n|_inf <= 1 term without the bare kernel.
+void real_sum(const Split &s, const double r[3], bool regular, bool near_regular, double &v, double g[3])
+{
+  v = 0;
+  g[0] = g[1] = g[2] = 0;
+  const int N = s.nreal;
+  for (int nx = -N; nx <= N; ++nx)
+    for (int ny = -N; ny <= N; ++ny)
+      for (int nz = -N; nz <= N; ++nz) {
+        const bool zero = nx == 0 && ny == 0 && nz == 0;
+        const bool near = std::abs(nx) <= 1 && std::abs(ny) <= 1 && std::abs(nz) <= 1;
+        const bool reg = (zero && regular) || (near && near_regular);
+        const double d[3] = {r[0] + kPeriod * nx, r[1] + kPeriod * ny, r[2] + kPeriod * nz};
+        const double rr = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        if (s.direct) {
+          if (reg || rr == 0.0) continue;    // direct sum: the near/bare terms are simply left out
+          double t, F;
+          s.real(rr, false, t, F);
+          v += t;
+          for (int k = 0; k < 3; ++k) g[k] += F * d[k];
+          continue;
+        }
+        if (rr == 0.0) {
+          if (reg) v += s.reg0();
+          continue;
+        }
+        double t, F;
+        s.real(rr, reg, t, F);
+        v += t;
+        for (int k = 0; k < 3; ++k) g[k] += F * d[k];
+      }
+}
+
+double recip_sum(const Split &s, const double r[3], double g[3])
+{
+  g[0] = g[1] = g[2] = 0;
+  if (s.direct) return 0.0;
+  const int K = s.kmax;
+  double v = 0;
+  std::vector<std::complex<double>> e[3];
+  for (int d = 0; d < 3; ++d) {
+    e[d].resize(2 * K + 1);
+    for (int m = -K; m <= K; ++m) e[d][m + K] = std::polar(1.0, kPi * m * r[d]);
+  }
+  for (int mx = -K; mx <= K; ++mx)
+    for (int my = -K; my <= K; ++my)
+      for (int mz = -K; mz <= K; ++mz) {
+        const int m2 = mx * mx + my * my + mz * mz;
+        if (m2 > K * K) continue;
+        const double w = s.weight(m2);
+        if (w == 0.0) continue;
+        const std::complex<double> ph = e[0][mx + K] * e[1][my + K] * e[2][mz + K];
+        v += w * ph.real();
+        g[0] -= w * kPi * mx * ph.imag();
+        g[1] -= w * kPi * my * ph.imag();
+        g[2] -= w * kPi * mz * ph.imag();
+      }
+  return v;
+}
+
+}    // namespace
+
+void periodic_green_unit(const KernelSpec &k, const double r[3], bool regular, double &value, double grad[3])
+{
+  const Split s(k);
+  double gr[3], gk[3];
+  real_sum(s, r, regular, false, value, gr);
+  value += recip_sum(s, r, gk) + s.background();
+  for (int d = 0; d < 3; ++d) grad[d] = gr[d] + gk[d];
+}
+
+namespace {
+
+std::shared_ptr<LatticeTable> compute_table(const KernelSpec &k, int p)
+{
+  const Split s(k);
+  auto t = std::make_shared<LatticeTable>();
+  t->p = p;
+  const int m = 2 * p - 1;
+  t->r.assign((std::size_t) m * m * m, 0.0);
+  const double step = p > 1 ? 2.0 * kRadiusInner / (p - 1) : 0.0;
+  // R is invariant under the cubic group: compute 0 <= i <= j <= k only
+  for (int i = 0; i < p; ++i)
+    for (int j = i; j < p; ++j)
+      for (int l = j; l < p; ++l) {
+        const double r[3] = {i * step, j * step, l * step};
+        double v, g[3];
+        real_sum(s, r, true, true, v, g);
+        if (!s.direct) {
+          double gk[3];
+          v += recip_sum(s, r, gk) + s.background();
+        }
+        const int a[3] = {i, j, l};
+        const int perm[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+        for (auto &pm : perm)
+          for (int sx = -1; sx <= 1; sx += 2)
+            for (int sy = -1; sy <= 1; sy += 2)
+              for (int sz = -1; sz <= 1; sz += 2) {
+                const int x = sx * a[pm[0]], y = sy * a[pm[1]], z = sz * a[pm[2]];
+                t->r[((std::size_t) (x + p - 1) * m + (y + p - 1)) * m + (z + p - 1)] = v;
+              }
+      }
+  return t;
+}
+
+}    // namespace
+
+std::shared_ptr<const LatticeTable> lattice_table(const KernelSpec &k, int p)
+{
+  static std::mutex mtx;
+  static std::map<std::pair<double, int>, std::shared_ptr<const LatticeTable>> cache;
+  const double key = k.type == KernelType::Yukawa ? k.kappa : -1.0;
+  {
+    std::lock_guard<std::mutex> lock(mtx);
+    auto it = cache.find({key, p});
+    if (it != cache.end()) return it->second;
+  }
+  auto t = compute_table(k, p);
+  std::lock_guard<std::mutex> lock(mtx);
+  if (cache.size() > 64) cache.clear();    // yukawa boxes that keep changing size
+  cache[{key, p}] = t;
+  return t;
+}
+
+// ------------------------------------------------------------------------------ reference sum
+
+void periodic_direct_sum(const KernelSpec &kernel, const double center[3], double h, std::size_t n_src,
+                         const double *src_xyz, const double *src_q, std::size_t n_trg, const double *trg_xyz,
+                         double *pot, double *grad)
+{
+  KernelSpec uk = kernel;
+  if (uk.type == KernelType::Yukawa) uk.kappa = kernel.kappa * h;
+  const Split s(uk);
+  std::vector<double> su, tu;
+  wrap_into_cell(n_src, src_xyz, center, h, su);
+  wrap_into_cell(n_trg, trg_xyz, center, h, tu);
+  for (std::size_t i = 0; i < n_src; ++i)
+    for (int d = 0; d < 3; ++d) su[3 * i + d] = (su[3 * i + d] - center[d]) / h;
+  for (std::size_t i = 0; i < n_trg; ++i)
+    for (int d = 0; d < 3; ++d) tu[3 * i + d] = (tu[3 * i + d] - center[d]) / h;
+  // structure factors S(m) = sum_j q_j exp(i pi m.y_j) over a half space of m (plus m = 0)
+  const int K = s.kmax;
+  std::vector<std::array<int, 3>> ms;
+  std::vector<double> w;
+  if (!s.direct)
+    for (int mx = 0; mx <= K; ++mx)
+      for (int my = -K; my <= K; ++my)
+        for (int mz = -K; mz <= K; ++mz) {
+          if (mx == 0 && (my < 0 || (my == 0 && mz < 0))) continue;
+          const int m2 = mx * mx + my * my + mz * mz;
+          if (m2 > K * K) continue;
+          const double ww = s.weight(m2);
+          if (ww == 0.0) continue;
+          ms.push_back({mx, my, mz});
+          w.push_back(m2 == 0 ? ww : 2 * ww);    // +-m pairs
+        }
+  const std::size_t nk = ms.size();
+  auto phases = [&](const double *u, std::vector<std::complex<double>> &e) {
+    e.resize(3 * (2 * K + 1));
+    for (int d = 0; d < 3; ++d)
+      for (int m = -K; m <= K; ++m) e[d * (2 * K + 1) + m + K] = std::polar(1.0, kPi * m * u[d]);
+  };
+  std::vector<std::complex<double>> S(nk, 0.0);
+  {
+    std::vector<std::complex<double>> e;
+    for (std::size_t j = 0; j < n_src; ++j) {
+      if (src_q[j] == 0.0) continue;
+      phases(&su[3 * j], e);
+      for (std::size_t q = 0; q < nk; ++q)
+        S[q] += src_q[j] * e[ms[q][0] + K] * e[(2 * K + 1) + ms[q][1] + K] * e[2 * (2 * K + 1) + ms[q][2] + K];
+    }
+  }
+  const double bg = s.background();
+  double qtot = 0;
+  for (std::size_t j = 0; j < n_src; ++j) qtot += src_q[j];
+#pragma omp parallel for schedule(dynamic, 4)
+  for (std::size_t i = 0; i < n_trg; ++i) {
+    double v = bg * qtot, g[3] = {0, 0, 0};
+    for (std::size_t j = 0; j < n_src; ++j) {
+      if (src_q[j] == 0.0) continue;
+      double r[3], t, gg[3];
+      for (int d = 0; d < 3; ++d) r[d] = tu[3 * i + d] - su[3 * j + d];
+      const bool same = r[0] == 0.0 && r[1] == 0.0 && r[2] == 0.0;
+      real_sum(s, r, same, false, t, gg);
+      v += src_q[j] * t;
+      for (int d = 0; d < 3; ++d) g[d] += src_q[j] * gg[d];
+    }
+    if (nk > 0) {
+      std::vector<std::complex<double>> e;
+      phases(&tu[3 * i], e);
+      for (std::size_t q = 0; q < nk; ++q) {
+        const std::complex<double> ph =
+            e[ms[q][0] + K] * e[(2 * K + 1) + ms[q][1] + K] * e[2 * (2 * K + 1) + ms[q][2] + K] * std::conj(S[q]);
+        v += w[q] * ph.real();
+        for (int d = 0; d < 3; ++d) g[d] -= w[q] * kPi * ms[q][d] * ph.imag();
+      }
+    }
+    if (pot) pot[i] = v / h;
+    if (grad)
+      for (int d = 0; d < 3; ++d) grad[3 * i + d] = g[d] / (h * h);
+  }
+}
+
+}    // namespace kifmm

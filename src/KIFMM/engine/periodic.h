@@ -1,0 +1,81 @@
+// Periodic boundaries (all three dimensions, cubic cell), PVFMM-style:
+//  * the tree root is the periodic cell (Options::fixed_root; points are wrapped into it);
+//  * interaction lists wrap at every level: the colleague of cell B at offset d is the cell at
+//    B + d modulo the number of cells of the level, i.e. an image with a root shift
+//    n in {-1,0,1}^3; the root's 27 colleagues are itself. Entries with n = 0 go to the
+//    ordinary lists (the free-space passes use them unchanged), entries with n != 0 to the
+//    image lists below (near pass with shifted targets, P2L with shifted check surfaces).
+//    M2L needs no shift: the colleague slot fixes the geometry (m2l_fft.h);
+//  * the images beyond the first shell (|n|_inf >= 2) act through ONE operator at the root:
+//    check_i += sum_k R(c_i - e_k) u_k, with u the root's upward equivalent density, c_i its
+//    downward check points and R(r) = G_per(r) - sum_{|n|_inf<=1} G(r - nL). The relative
+//    positions c_i - e_k lie on the M2L lattice, so R is tabulated there ((2p-1)^3 values).
+//    G_per is the Ewald sum (Laplace: tin-foil, k = 0 omitted, with the -pi/(V alpha^2)
+//    constant, i.e. a uniform neutralizing background for a net charge; Yukawa: the
+//    absolutely convergent lattice sum, by a screened Ewald split or directly).
+//  * Laplace only: R is not harmonic (lap R = 4 pi / V, the background), R = H + (2pi/3V)|r|^2;
+//    the equivalent density reproduces the harmonic part and the monopole and dipole, so the
+//    far field is exact up to a constant (2pi/3V)(sum_j q_j |y_j-c|^2 - sum_k u_k |e_k-c|^2),
+//    which is added to the potential (it changes the energy of non-neutral systems only).
+#pragma once
+
+#include "interaction_lists.h"
+#include "kifmm.h"
+#include "octree.h"
+
+#include <cstddef>
+#include <memory>
+#include <vector>
+
+namespace kifmm {
+
+// Compressed rows of (cell, root shift) entries; shift has 3 values in {-1,0,1} per entry.
+struct ImageList {
+  std::vector<int> off, idx;
+  std::vector<signed char> shift;
+  int size(int i) const { return off.empty() ? 0 : off[i + 1] - off[i]; }
+  int begin(int i) const { return off[i]; }
+  int end(int i) const { return off[i + 1]; }
+  const signed char *shift_of(int e) const { return &shift[3 * (std::size_t) e]; }
+};
+
+struct PeriodicImageLists {
+  ImageList U, W, X;      // entries with a nonzero shift (the n = 0 ones are in InteractionLists)
+  std::vector<signed char> V_shift;    // shift of every entry of InteractionLists::V (tests)
+  std::size_t bytes() const;
+};
+
+// Periodic lists of a tree whose root is the periodic cell (see above).
+void build_periodic_interaction_lists(const Octree &tree, InteractionLists &lists,
+                                      PeriodicImageLists &images);
+
+// Root shift of the colleague at slot s ((dx+1)*9+(dy+1)*3+(dz+1)) of cell c (periodic tree).
+void colleague_shift(const Cell &c, int slot, int shift[3]);
+
+// Copies of the points wrapped into the cell [center - h, center + h)^3.
+void wrap_into_cell(std::size_t n, const double *xyz, const double center[3], double h,
+                    std::vector<double> &out);
+
+// Far-image operator table of the unit root (half-width 1, period 2) for order p:
+// r[((i+p-1)*m + j+p-1)*m + k+p-1] = R((i,j,k) * 2*1.05/(p-1)), m = 2p-1. For a root of
+// half-width h the physical operator is R_unit / h (Laplace; Yukawa with kappa_unit = kappa h).
+struct LatticeTable {
+  int p = 0;
+  std::vector<double> r;
+};
+std::shared_ptr<const LatticeTable> lattice_table(const KernelSpec &unit_kernel, int p);
+
+// Periodic Green's function of the unit cell (period 2) and its gradient, r in unit
+// coordinates; `regular` subtracts the bare kernel of the n = 0 term (finite at r = 0).
+// Laplace includes the background constant. For tests and the reference sum.
+void periodic_green_unit(const KernelSpec &unit_kernel, const double r[3], bool regular,
+                         double &value, double grad[3]);
+
+// Exact periodic reference with the engine's conventions (pairs at r = 0 skip only the bare
+// n = 0 term; their images and the background are included): Ewald (real space + structure
+// factors), O(N M) + O((N + M) K). Cubic cell [center - h, center + h)^3.
+void periodic_direct_sum(const KernelSpec &kernel, const double center[3], double half_width,
+                         std::size_t n_src, const double *src_xyz, const double *src_q,
+                         std::size_t n_trg, const double *trg_xyz, double *pot, double *grad);
+
+}    // namespace kifmm

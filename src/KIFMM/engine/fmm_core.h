@@ -16,6 +16,7 @@
 #include "operator_cache.h"
 #include "operators.h"
 #include "p2p.h"
+#include "periodic.h"
 #include "surface.h"
 
 #include <omp.h>
@@ -46,6 +47,7 @@ template <class K> class FmmEvaluator : public Evaluator {
   const Stats &stats() const override { return stats_; }
   const KernelSpec &kernel() const override { return spec_; }
   const Options &options() const override { return opt_; }
+  void set_root(const double center[3], double half_width) override;
 
   // Internals of the last evaluation (tests).
   const Octree &tree() const { return tree_; }
@@ -85,6 +87,16 @@ template <class K> class FmmEvaluator : public Evaluator {
   void p2l();
   void downward();
   void leaf_pass(bool want_pot, bool want_grad);
+  // periodic boundaries (periodic.h, periodic_core.h)
+  PeriodicImageLists plists_;
+  std::shared_ptr<const LatticeTable> lattice_;
+  std::vector<int> plattice_;
+  std::vector<double> pwrap_src_, pwrap_trg_;
+  double periodic_const_ = 0.0;
+  int first_level() const { return opt_.periodic ? 0 : 2; }    // first level with expansions
+  void periodic_wrap(std::size_t ns, const double *&sxyz, std::size_t nt, const double *&txyz);
+  void periodic_far();
+  void periodic_near(bool want_pot);
 };
 
 template <class K> void FmmEvaluator<K>::setup_operators(double &t_setup)
@@ -96,7 +108,7 @@ template <class K> void FmmEvaluator<K>::setup_operators(double &t_setup)
     double s;
     const UnitKernel uk = make_unit_kernel(k_, tree_.half_width(l), s);
     scale_[l] = s;
-    if (l < 2) continue;    // levels 0,1 carry no expansions (non-periodic)
+    if (l < first_level()) continue;    // levels 0,1 carry no expansions (non-periodic)
     if (level_independent_operators<K>() && l > 0 && ops_[l - 1]) {
       ops_[l] = ops_[l - 1];
       continue;
@@ -117,7 +129,7 @@ template <class K> void FmmEvaluator<K>::upward(bool)
 {
   const auto &cells = tree_.cells;
   constexpr int kBatch = 64;
-  for (int l = tree_.depth; l >= 2; --l) {
+  for (int l = tree_.depth; l >= first_level(); --l) {
     const OperatorSet &op = *ops_[l];
     const double inv_s = 1.0 / scale_[l];
     std::vector<int> list;
@@ -184,7 +196,7 @@ template <class K> void FmmEvaluator<K>::m2l()
   std::vector<const double *> xtab;
   std::vector<double *> ytab;
   std::vector<std::pair<int, int>> pairs[27];
-  for (int l = 2; l <= tree_.depth; ++l) {
+  for (int l = std::max(first_level(), 1); l <= tree_.depth; ++l) {
     const int b0 = tree_.level_begin[l], b1 = tree_.level_begin[l + 1];
     const int p0 = tree_.level_begin[l - 1], p1 = tree_.level_begin[l];
     // source cells (children of a target parent's colleague) and target cells (V non-empty)
@@ -285,13 +297,13 @@ template <class K> void FmmEvaluator<K>::downward()
 {
   const auto &cells = tree_.cells;
   constexpr int kBatch = 64;
-  for (int l = 2; l <= tree_.depth; ++l) {
+  for (int l = first_level(); l <= tree_.depth; ++l) {
     const OperatorSet &op = *ops_[l];
     const double inv_s = 1.0 / scale_[l];
     std::vector<int> list;
     for (int c = tree_.level_begin[l]; c < tree_.level_begin[l + 1]; ++c) {
       if (cells[c].n_trg() == 0) continue;
-      if (l > 2 && has_local_[cells[c].parent]) has_local_[c] = 1;
+      if (l > first_level() && has_local_[cells[c].parent]) has_local_[c] = 1;
       if (has_local_[c]) list.push_back(c);
     }
     const int n = (int) list.size(), nchunks = (n + kBatch - 1) / kBatch;
@@ -304,7 +316,7 @@ template <class K> void FmmEvaluator<K>::downward()
         const int i0 = ch * kBatch, m = std::min(n, (ch + 1) * kBatch) - i0;
         chk.resize((std::size_t) nsurf_ * m);
         for (int j = 0; j < m; ++j) std::copy(dcheck(list[i0 + j]), dcheck(list[i0 + j]) + nsurf_, &chk[(std::size_t) j * nsurf_]);
-        if (l > 2) {    // L2L by octant, from the parents' downward equivalents
+        if (l > first_level()) {    // L2L by octant, from the parents' downward equivalents
           for (int oct = 0; oct < 8; ++oct) {
             sel.clear();
             for (int j = 0; j < m; ++j) {
@@ -464,6 +476,8 @@ void FmmEvaluator<K>::evaluate(std::size_t n_src, const double *src_xyz, const d
   }
   stats_.n_sources = ns;
   if (ns == 0) return;
+  const bool same_arrays = src_xyz == trg_xyz;
+  if (opt_.periodic) periodic_wrap(ns, sxyz, n_trg, trg_xyz);
   RootBox root;
   if (opt_.fixed_root) {
     for (int d = 0; d < 3; ++d) root.center[d] = opt_.root_center[d];
@@ -501,7 +515,8 @@ void FmmEvaluator<K>::evaluate(std::size_t n_src, const double *src_xyz, const d
   }
   double t1 = omp_get_wtime();
   stats_.t_tree = t1 - t;
-  build_interaction_lists(tree_, lists_);
+  if (opt_.periodic) build_periodic_interaction_lists(tree_, lists_, plists_);
+  else build_interaction_lists(tree_, lists_);
   double t2 = omp_get_wtime();
   stats_.t_lists = t2 - t1;
   stats_.depth = tree_.depth;
@@ -529,11 +544,13 @@ void FmmEvaluator<K>::evaluate(std::size_t n_src, const double *src_xyz, const d
   double t5 = omp_get_wtime();
   stats_.t_m2l = t5 - t4;
   p2l();
+  if (opt_.periodic) periodic_far();
   double t6 = omp_get_wtime();
   stats_.t_wx = t6 - t5;
   downward();
   stats_.t_downward = omp_get_wtime() - t6;
   leaf_pass(pot != nullptr, grad != nullptr);
+  if (opt_.periodic) periodic_near(pot != nullptr);
 
   // results back in input order
 #pragma omp parallel for schedule(static)
@@ -547,10 +564,12 @@ void FmmEvaluator<K>::evaluate(std::size_t n_src, const double *src_xyz, const d
     }
   }
   // self pairs (same arrays) are not coincident pairs
-  if (src_xyz == trg_xyz && n_src == n_trg && stats_.coincident_pairs >= ns) stats_.coincident_pairs -= ns;
+  if (same_arrays && n_src == n_trg && stats_.coincident_pairs >= ns) stats_.coincident_pairs -= ns;
   stats_.tree_bytes = tree_.bytes() + lists_.bytes() +
       sizeof(double) * (up_equiv_.size() + dn_check_.size() + dn_equiv_.size() + xhat_.capacity() + yhat_.capacity() +
                         sx_.size() * 4 + tx_.size() * 7);
 }
 
 }    // namespace kifmm
+
+#include "periodic_core.h"    // periodic passes (member templates)

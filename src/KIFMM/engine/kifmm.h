@@ -32,6 +32,10 @@ struct Options {
   bool fixed_root = false;
   double root_center[3] = {0.0, 0.0, 0.0};
   double root_half_width = 1.0;
+  // Periodic in x, y and z with the fixed root as the (cubic) periodic cell; points are wrapped
+  // into it. Laplace: tin-foil Ewald sum (k = 0 omitted) with a uniform neutralizing background
+  // for a net charge; Yukawa: the lattice sum. Needs fixed_root (see set_root, periodic.h).
+  bool periodic = false;
 };
 
 // Timings in seconds and sizes of the last evaluate() call.
@@ -60,6 +64,8 @@ class Evaluator {
   virtual const Stats &stats() const = 0;
   virtual const KernelSpec &kernel() const = 0;
   virtual const Options &options() const = 0;
+  // New fixed root (e.g. the periodic cell of a box that changed); sets fixed_root.
+  virtual void set_root(const double center[3], double half_width) = 0;
 };
 
 std::unique_ptr<Evaluator> make_evaluator(const KernelSpec &kernel, const Options &options);

@@ -9,6 +9,7 @@
 #include "force.h"
 #include "input.h"
 #include "memory.h"
+#include "modify.h"
 #include "pair.h"
 #include "update.h"
 #include "utils.h"
@@ -32,6 +33,7 @@ std::string default_cache_dir()
   return "";
 }
 const char *error_variable = "kifmm_error";
+const char *timing_fix_id = "KIFMM_TIMING";
 }    // namespace
 
 KSpaceKIFMM::KSpaceKIFMM(LAMMPS *lmp) : KSpace(lmp)
@@ -41,7 +43,10 @@ KSpaceKIFMM::KSpaceKIFMM(LAMMPS *lmp) : KSpace(lmp)
   triclinic_support = 0;
 }
 
-KSpaceKIFMM::~KSpaceKIFMM() = default;
+KSpaceKIFMM::~KSpaceKIFMM()
+{
+  if (modify && modify->find_fix(timing_fix_id) >= 0) modify->delete_fix(timing_fix_id);
+}
 
 void KSpaceKIFMM::settings(int narg, char **arg)
 {
@@ -154,6 +159,10 @@ void KSpaceKIFMM::init()
   engine_options = engine->options();
   estimated_error = est;
 
+  // the end-of-run time breakdown is printed by an internal fix (fixes get post_run)
+  if (modify->find_fix(timing_fix_id) < 0)
+    modify->add_fix(std::string(timing_fix_id) + " all KIFMM/TIMING");
+
   if (comm->me == 0) {
     std::string mesg = "KIFMM initialization ...\n";
     mesg += fmt::format("  kernel = {}", kifmm_lammps::kernel_name(kset.kernel));
@@ -175,6 +184,7 @@ void KSpaceKIFMM::init()
 void KSpaceKIFMM::setup()
 {
   warned_coincident = false;
+  run_timing.reset();
   // memory the evaluations may use (read once per run; see check_memory)
   memory_limit_mb = 0;
   if (const char *env = std::getenv("KIFMM_MEMORY_LIMIT_MB")) {
@@ -306,12 +316,15 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
     for (int i = 0; i < atom->nlocal; ++i)
       for (int k = 0; k < 6; ++k) vatom[i][k] = 0.0;
 
+  const double t_start = MPI_Wtime();
   gather_points();
   const std::size_t n = index.size();
 
   // sources: the atoms of nonzero strength of all ranks; targets: this rank's
   // (a replicated source set until the distributed engine lands)
+  const double t_comm = MPI_Wtime();
   gather_sources();
+  const double comm_time = MPI_Wtime() - t_comm;
   const std::size_t nsrc = source_strength().size();
   const double *sx = source_xyz().data(), *ss = source_strength().data();
 
@@ -322,6 +335,8 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   if (nsrc > 0)
     engine->evaluate(nsrc, sx, ss, n, xyz.data(), want_potential ? pot.data() : nullptr,
                      grad.data());
+  const kifmm::Stats no_work;
+  const kifmm::Stats &phases = nsrc > 0 ? engine->stats() : no_work;
 
   double **f = atom->f;
   const double cf = force_prefactor(), ce = energy_prefactor();
@@ -369,6 +384,7 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
     per_atom_virial(cf, center);
   }
 
+  run_timing.add(phases, comm_time, MPI_Wtime() - t_start, n);
   if (!reported_first_evaluation) report_first_evaluation();
   report_coincident_pairs(nsrc > 0 ? engine->stats().coincident_pairs : 0);
   if (kset.check_every > 0 && update->ntimestep % kset.check_every == 0) check_error();

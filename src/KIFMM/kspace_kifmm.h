@@ -6,6 +6,7 @@
 
 #include "kifmm.h"
 #include "kifmm_keywords.h"
+#include "kifmm_timing.h"
 #include "kspace.h"
 
 #include <memory>
@@ -27,6 +28,8 @@ class KSpaceKIFMM : public KSpace {
   // last measured relative RMS force error of `check` (negative when never measured)
   double measured_error() const { return last_measured_error; }
   const kifmm::Stats &engine_stats() const;
+  // time by phase since the setup of the current run (printed at its end)
+  const KIFMMTiming &timing() const { return run_timing; }
 
  private:
   kifmm_lammps::KIFMMSettings kset;
@@ -36,6 +39,7 @@ class KSpaceKIFMM : public KSpace {
   double last_measured_error = -1.0;
   bool reported_first_evaluation = false;
   bool warned_coincident = false;
+  KIFMMTiming run_timing;
   double memory_limit_mb = 0;    // 0 = unknown: no check
 
   // atoms of nonzero strength, reused between calls

@@ -4,6 +4,7 @@
 
 #include "fix_kifmm_stride.h"
 #include "fix_clump_rigid.h"
+#include "kifmm_timing.h"
 #include "kspace_kifmm.h"
 
 #include "lammps.h"
@@ -15,6 +16,10 @@ namespace kifmm_lammps {
 const char *const lammps_version_built_against = KIFMM_LAMMPS_VERSION;
 
 namespace {
+void *make_fix_kifmm_timing(void *lmp, int narg, char **arg)
+{
+  return new FixKIFMMTiming(static_cast<LAMMPS *>(lmp), narg, arg);
+}
 void *make_kspace_kifmm(void *lmp)
 {
   return new KSpaceKIFMM(static_cast<LAMMPS *>(lmp));
@@ -48,6 +53,8 @@ const std::vector<lammpsplugin_t> &package_styles()
     };
     add("kspace", "kifmm", "long-range coulomb/gravity/yukawa by the kernel-independent FMM")
         .creator.v1 = &make_kspace_kifmm;
+    add("fix", "KIFMM/TIMING", "internal: end-of-run time breakdown of kspace kifmm")
+        .creator.v2 = &make_fix_kifmm_timing;
     add("fix", "kifmm/stride", "long-range forces of kspace kifmm refreshed every N steps")
         .creator.v2 = &make_fix_kifmm_stride;
     add("fix", "clump/rigid", "rigid clumps of spherical pebbles (union mass, wraps rigid/small)")

@@ -1,0 +1,38 @@
+// Time spent by kspace_style kifmm during a run, by phase, and its end-of-run table
+// (min/avg/max over ranks, like LAMMPS's own timing breakdown). The table is printed by an
+// internal fix (ID KIFMM_TIMING) that the kspace style creates, because fixes are what LAMMPS
+// calls at the end of a run.
+#pragma once
+
+#include "fix.h"
+
+#include <cstddef>
+
+namespace kifmm {
+struct Stats;
+}
+
+namespace LAMMPS_NS {
+
+struct KIFMMTiming {
+  enum Phase { Tree, Lists, Upward, M2L, WX, Downward, P2P, Comm, Other, NPHASES };
+  double t[NPHASES] = {};
+  long evaluations = 0;
+  double points = 0;    // sum over evaluations of this rank's targets
+
+  void reset() { *this = KIFMMTiming(); }
+  // adds one evaluation: engine phases from its stats, comm measured by the adapter, total
+  void add(const kifmm::Stats &s, double comm, double total, std::size_t targets);
+};
+
+class FixKIFMMTiming : public Fix {
+ public:
+  FixKIFMMTiming(class LAMMPS *, int, char **);
+  int setmask() override { return 0; }
+  void post_run() override;
+};
+
+// prints the table of `timing` (collective over ranks)
+void print_kifmm_timing(class LAMMPS *lmp, const KIFMMTiming &timing);
+
+}    // namespace LAMMPS_NS

@@ -181,8 +181,14 @@ def make_plots(recs, outdir, cases, profile):
                 if not rs:
                     continue
                 c = COLORS[solver]
+                lab = LABELS[solver] if n == ns[-ncol] else None
+                if solver in EXACT:
+                    # exact: a vertical line at its time (its error is round-off)
+                    t = min(r["t_eval"] for r in rs)
+                    ax.axvline(t, color=c, lw=1.0, ls="--", label=lab)
+                    continue
                 ax.scatter([r["t_eval"] for r in rs], [floor_err(r["error"]) for r in rs],
-                           color=c, s=18, label=LABELS[solver] if n == ns[-ncol] else None)
+                           color=c, s=18, label=lab)
                 if solver not in EXACT:
                     fr = front(rs)
                     ax.plot([r["t_eval"] for r in fr], [floor_err(r["error"]) for r in fr],
@@ -197,6 +203,7 @@ def make_plots(recs, outdir, cases, profile):
                 ax.axhline(e, color="0.8", lw=0.6, ls=":")
             ax.set_xscale("log")
             ax.set_yscale("log")
+            ax.set_ylim(3e-17, 0.3)
             natoms = runs[0]["natoms"] if runs else n
             ref = ref_of(recs, case, n)
             sampled = ref and ref.get("sampled", natoms) < natoms
@@ -205,7 +212,7 @@ def make_plots(recs, outdir, cases, profile):
             ax.set_xlabel("time per force evaluation [s]")
             ax.set_ylabel("relative force error")
             ax.grid(True, which="major", lw=0.3)
-        axes[0][0].legend(fontsize=7, loc="lower left")
+        axes[0][0].legend(fontsize=7, loc="best")
         fig.tight_layout()
         fn = os.path.join(outdir, f"pareto_{case}.png")
         fig.savefig(fn, dpi=110)
@@ -380,6 +387,34 @@ def runs_table(recs, case):
     return "\n".join(lines) + "\n"
 
 
+def summary(recs, cases):
+    """One line per case at its largest N: kifmm's speed ratios at matched error."""
+    lines = []
+    for case in cases:
+        ns = [n for n in ns_of(recs, case) if ok_runs(recs, case, n, "kifmm")]
+        if not ns:
+            continue
+        n = ns[-1]
+        natoms = ok_runs(recs, case, n)[0]["natoms"]
+        td, fd = direct_time(recs, case, n)
+        parts = []
+        for e in TARGETS:
+            tk, fk = time_at(ok_runs(recs, case, n, "kifmm"), e)
+            tm, fm = time_at(ok_runs(recs, case, n, "msm"), e)
+            if tk is None:
+                parts.append(f"{e:.0e}: kifmm n/r")
+                continue
+            m = (fmt_ratio(ratio(tm, tk), "~" if "<=" in (fk, fm) else "") + " vs msm"
+                 if tm is not None else "msm n/r")
+            d = fmt_ratio(ratio(td, tk), "~" if (fd == "~" or fk == "<=") else "") \
+                if td is not None else "n/r"
+            parts.append(f"{e:.0e}: {m}, {d} vs direct")
+        ref = ref_of(recs, case, n)
+        samp = " (sampled reference)" if ref and ref["sampled"] < ref["natoms"] else ""
+        lines.append(f"* **{case}**, N = {natoms}{samp}: " + "; ".join(parts) + ".")
+    return "\n".join(lines) + "\n"
+
+
 def reference_table(recs, cases):
     lines = ["| case | N | reference atoms | RMS force | time [s] | clump scale |",
              "|---|---|---|---|---|---|"]
@@ -540,6 +575,13 @@ def write_doc(recs, doc, plots, profile, cases_path):
     w("```sh\nbash bench/solvers/run.sh            # full: bench/solvers/results/ + this file\n"
       "bash bench/solvers/run.sh --quick    # N <= 1e4, minutes, report in the build directory\n"
       "bash bench/solvers/run.sh --report-only   # tables and plots from the stored results\n```\n")
+    w("## Summary: kifmm's speed ratio at matched error (largest N of each case)\n")
+    w("How many times faster kifmm is than msm's best setting and than the exact direct sum "
+      "for the same measured relative force error (ratios of times measured in the same "
+      "campaign; `~`: one of the times is a bound or an N^2 extrapolation, see below; "
+      "`msm n/r`: no msm setting reached that error). Full table: "
+      "[speed ratio at matched error](#speed-ratio-at-matched-error).\n")
+    w(summary(recs, cases_of(recs)))
     w("## What is measured\n")
     w("""All solvers see the same atoms (one LAMMPS data file per configuration and N, `units lj`,
 unit charges, dielectric 1, `boundary f f f`) and are compared with the same exact
@@ -627,7 +669,9 @@ its time is extrapolated as N^2 from the largest N where it ran.
     w(setup_table(recs))
     w("\n## Pareto fronts (error versus time) per configuration\n")
     w("Filled markers: relative force error of the atoms; hollow markers: clump net-force "
-      "error. Lines join each solver's Pareto front. Dotted lines: 1e-3, 1e-5, 1e-7.\n")
+      "error. Lines join each solver's Pareto front. Dashed vertical lines: the exact direct "
+      "sums (error at round-off). Errors below 1e-16 (kifmm runs whose octree is a single "
+      "leaf, i.e. a direct sum) are drawn at 1e-16. Dotted lines: 1e-3, 1e-5, 1e-7.\n")
     for c in main_cases + hard_cases:
         if f"pareto_{c}" in rel:
             w(f"\n![{c}]({rel[f'pareto_{c}']})\n")

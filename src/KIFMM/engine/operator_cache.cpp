@@ -12,6 +12,8 @@
 #include <mutex>
 #include <thread>
 
+#include <unistd.h>
+
 namespace kifmm {
 
 namespace {
@@ -95,7 +97,9 @@ std::string operator_cache_file(const std::string &cache_dir, const std::string 
 bool write_operator_file(const std::string &path, const OperatorSet &op0)
 {
   OperatorSet &op = const_cast<OperatorSet &>(op0);    // arrays() only reads here
-  const std::string tmp = path + ".tmp" + std::to_string(std::hash<std::thread::id>()(std::this_thread::get_id()));
+  // unique per process and thread (several MPI ranks may write the same set at once)
+  const std::string tmp = path + ".tmp" + std::to_string(::getpid()) + "_" +
+      std::to_string(std::hash<std::thread::id>()(std::this_thread::get_id()));
   std::ofstream f(tmp, std::ios::binary);
   if (!f) return false;
   Fnv h;

@@ -345,6 +345,29 @@ TEST_F(KSpaceKifmm, CheckMeasuresTheErrorIntoAVariable)
   EXPECT_DOUBLE_EQ(kspace()->measured_error(), measured);
 }
 
+TEST_F(KSpaceKifmm, EndOfRunPrintsTheTimeBreakdown)
+{
+  load(uniform_cube(3000, 1));
+  commands("pair_style zero 0.01\npair_coeff * *\nkspace_style kifmm 1e-4\n"
+           "kspace_modify kifmm leaf 64\nfix nve all nve");
+  char *buf = nullptr;
+  size_t len = 0;
+  FILE *mem = open_memstream(&buf, &len);
+  lmp->screen = mem;
+  command("run 3 post no");
+  fflush(mem);
+  lmp->screen = nullptr;
+  fclose(mem);
+  std::string out(buf, len);
+  free(buf);
+  EXPECT_NE(out.find("KIFMM time breakdown (4 evaluations)"), std::string::npos) << out;
+  for (const char *phase : {"Tree ", "Upward ", "M2L ", "Downward ", "P2P ", "Comm "})
+    EXPECT_NE(out.find(phase), std::string::npos) << phase;
+  EXPECT_NE(out.find("per rank and evaluation min/avg/max = 3000 / 3000 / 3000"), std::string::npos);
+  EXPECT_EQ(kspace()->timing().evaluations, 4);
+  EXPECT_GT(kspace()->timing().t[LAMMPS_NS::KIFMMTiming::P2P], 0.0);
+}
+
 TEST_F(KSpaceKifmm, CoulombPairStyleGivesDoubleCountingWarning)
 {
   load(uniform_cube(100, 1));

@@ -9,6 +9,7 @@
 #include "modify.h"
 
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -53,12 +54,28 @@ struct Pebble {
   double x = 0, y = 0, z = 0, r = 0, q = 0;
 };
 
-// Writes a molecule file of pebbles (type 1 if q == 0, else 2) into a per-process temp dir.
+// Per-process scratch directory, removed when the process exits (also after a LAMMPS error,
+// which ends the process through exit()).
+inline std::filesystem::path scratch_dir()
+{
+  static std::string dir;
+  if (dir.empty()) {
+    dir = (std::filesystem::temp_directory_path() /
+           ("clump_test_" + std::to_string((long) getpid())))
+              .string();
+    std::filesystem::create_directories(dir);
+    std::atexit([] {
+      std::error_code ec;
+      std::filesystem::remove_all(dir, ec);
+    });
+  }
+  return dir;
+}
+
+// Writes a molecule file of pebbles (type 1 if q == 0, else 2) into the scratch directory.
 inline std::string write_molecule(const std::string &name, const std::vector<Pebble> &p)
 {
-  auto dir = std::filesystem::temp_directory_path() /
-      ("clump_test_" + std::to_string((long) getpid()));
-  std::filesystem::create_directories(dir);
+  auto dir = scratch_dir();
   auto path = (dir / (name + ".mol")).string();
   std::ofstream f(path);
   f.precision(17);

@@ -284,8 +284,8 @@ run 0
 }    // namespace
 
 // Torque-free asymmetric clump: the fitted initial motion is the imposed one, and kinetic
-// energy and angular momentum stay constant over 1e4 steps (the 1e5 steps take 10x
-// longer with the same per-step behaviour; CI runs 1e4).
+// energy and angular momentum stay constant over 1e5 steps (about 80 turns), with both
+// integrators (rigid/small: Richardson quaternion update; rigid/nve/small: symplectic).
 TEST_F(FixClumpRigidTest, TorqueFreeClumpConservesEnergyAndAngularMomentum)
 {
   for (const std::string integ : {"small", "nve"}) {
@@ -302,9 +302,10 @@ TEST_F(FixClumpRigidTest, TorqueFreeClumpConservesEnergyAndAngularMomentum)
     auto r0 = rows().at(1);
     double l0[3] = {r0[ANGMOMX], r0[ANGMOMY], r0[ANGMOMZ]};
     double lnorm = std::sqrt(l0[0] * l0[0] + l0[1] * l0[1] + l0[2] * l0[2]);
-    command("run 10000");
+    command("run 100000");
     auto r1 = rows().at(1);
-    EXPECT_NEAR(evaluate("f_c[3]") / e0, 1.0, 1e-6);
+    // measured: 7e-6 (Richardson, small), 1e-7 (symplectic, nve)
+    EXPECT_NEAR(evaluate("f_c[3]") / e0, 1.0, integ == "small" ? 2e-5 : 1e-6);
     EXPECT_NEAR(r1[ANGMOMX], l0[0], 1e-9 * lnorm);
     EXPECT_NEAR(r1[ANGMOMY], l0[1], 1e-9 * lnorm);
     EXPECT_NEAR(r1[ANGMOMZ], l0[2], 1e-9 * lnorm);

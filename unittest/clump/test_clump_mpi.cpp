@@ -1,0 +1,147 @@
+// fix clump/rigid in parallel equals serial: the same granular system of clumps (pair
+// gran/hooke/history between clumps, a damped granular wall, a uniform field on charged
+// pebbles, clumps straddling the processor boundary) is run on MPI_COMM_WORLD and, on every
+// rank, on MPI_COMM_SELF; clump positions, orientations and velocities must agree.
+// Registered to run under mpirun -np 2 (label mpi); also passes on one rank.
+#include "clump_test_util.h"
+
+#include "package_styles.h"
+
+#include "compute.h"
+#include "input.h"
+#include "modify.h"
+#include "lammps.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <sstream>
+
+using namespace clump_test;
+using LAMMPS_NS::LAMMPS;
+
+namespace {
+
+LAMMPS *make_lammps(MPI_Comm comm)
+{
+  std::vector<std::string> args = {"clump_mpi", "-log", "none", "-nocite", "-echo", "none"};
+  if (!std::getenv("KIFMM_TEST_VERBOSE")) {
+    args.push_back("-screen");
+    args.push_back("none");
+  }
+  std::vector<char *> argv;
+  for (auto &a : args) argv.push_back(const_cast<char *>(a.c_str()));
+  argv.push_back(nullptr);
+  auto *lmp = new LAMMPS((int) args.size(), argv.data(), comm);
+  kifmm_lammps::add_package_styles(lmp);
+  return lmp;
+}
+
+void run_script(LAMMPS *lmp, const std::string &script)
+{
+  std::istringstream in(script);
+  std::string line;
+  while (std::getline(in, line))
+    if (line.find_first_not_of(" \t") != std::string::npos) lmp->input->one(line);
+}
+
+std::string system_script(const std::string &dimer_file, const std::string &asym_file)
+{
+  std::ostringstream s;
+  s << R"(
+units si
+atom_style hybrid sphere charge
+atom_modify map array
+boundary p p f
+fix prop all property/atom mol ghost yes
+region box block -0.2 0.2 -0.05 0.05 -0.05 0.05
+create_box 2 box
+mass * 1.0
+comm_modify cutoff 0.04 vel yes
+neighbor 0.002 bin
+thermo_style custom step
+)";
+  s << "molecule dim " << dimer_file << "\nmolecule asym " << asym_file << "\nmolecule dip "
+    << potentials << "/dipole3.mol\n";
+  // a row of clumps along x, one straddling x = 0 (the processor boundary on 2 ranks)
+  const char *shape[] = {"dim", "asym", "dip", "dim", "asym", "dip", "dim", "asym"};
+  for (int k = 0; k < 8; ++k) {
+    double x = -0.17 + 0.045 * k;
+    s << "create_atoms 0 single " << x << " " << 0.003 * (k % 3) << " " << -0.030 + 0.003 * (k % 2)
+      << " mol " << shape[k] << " " << 100 + k << " rotate " << 17 * k + 5 << " 1 " << k % 3
+      << " 2\n";
+  }
+  s << R"(
+pair_style gran/hooke/history 200.0 NULL 30.0 NULL 0.5 1
+pair_coeff * *
+timestep 2e-5
+fix wall all wall/gran hooke 200.0 NULL 30.0 NULL 0.5 1 zplane -0.05 NULL
+fix ef all efield 2.0e-3 0.0 -1.0e-3
+variable vx atom 0.3*sin(40*x)+0.1*cos(60*y)
+variable vy atom 0.05*cos(30*x)
+velocity all set v_vx v_vy -1.0
+fix c all clump/rigid density 2500
+)";
+  return s.str();
+}
+
+}    // namespace
+
+TEST(ClumpMpi, ParallelEqualsSerial)
+{
+  const std::string dimer_file = write_molecule("dimer", dimer());
+  const std::string asym_file = write_molecule("asym", asymmetric());
+  const std::string script = system_script(dimer_file, asym_file);
+
+  LAMMPS *par = make_lammps(MPI_COMM_WORLD);
+  LAMMPS *ser = make_lammps(MPI_COMM_SELF);
+  run_script(par, script);
+  run_script(ser, script);
+
+  int nprocs;
+  MPI_Comm_size(MPI_COMM_WORLD, &nprocs);
+  // clumps are spread over the ranks
+  {
+    int ic = par->modify->find_compute("c_local");
+    ASSERT_GE(ic, 0);
+    run_script(par, "run 0");
+    run_script(ser, "run 0");
+    auto *c = par->modify->compute[ic];
+    c->compute_local();
+    int mine = c->size_local_rows, fewest;
+    MPI_Allreduce(&mine, &fewest, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+    EXPECT_GT(fewest, 0) << "every rank owns clumps";
+  }
+  auto r0 = clump_rows(ser, "c");
+  ASSERT_EQ(r0.size(), 8u);
+  for (int chunk = 0; chunk < 3; ++chunk) {
+    run_script(par, "run 500 post no");
+    run_script(ser, "run 500 post no");
+    auto rp = clump_rows(par, "c"), rs = clump_rows(ser, "c");
+    ASSERT_EQ(rp.size(), rs.size());
+    for (auto &[mol, s] : rs) {
+      const auto &p = rp.at(mol);
+      SCOPED_TRACE(testing::Message() << "clump " << mol << " after " << 500 * (chunk + 1));
+      EXPECT_EQ(p[MASS], s[MASS]);
+      for (int k : {XU, YU, ZU}) EXPECT_NEAR(p[k], s[k], 1e-10);
+      for (int k : {VX, VY, VZ}) EXPECT_NEAR(p[k], s[k], 1e-8);
+      for (int k : {QUATW, QUATI, QUATJ, QUATK}) EXPECT_NEAR(p[k], s[k], 1e-8);
+      for (int k : {OMEGAX, OMEGAY, OMEGAZ}) EXPECT_NEAR(p[k], s[k], 1e-5 + 1e-8 * std::fabs(s[k]));
+    }
+  }
+  // the run had contacts and field forces: clumps lost energy to damping, moved, turned
+  auto r1 = clump_rows(ser, "c");
+  int turned = 0;
+  for (auto &[mol, s] : r1) {
+    const auto &a = r0.at(mol);
+    if (std::fabs(s[QUATW] - a[QUATW]) + std::fabs(s[QUATI] - a[QUATI]) > 1e-3) ++turned;
+  }
+  EXPECT_GE(turned, 4);
+  double vz_up = 0;
+  for (auto &[mol, s] : r1) vz_up = std::max(vz_up, s[VZ]);
+  EXPECT_GT(vz_up, 0.0) << "some clump bounced off the wall";
+  delete ser;
+  delete par;
+}

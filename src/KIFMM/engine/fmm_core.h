@@ -92,7 +92,7 @@ template <class K> class FmmEvaluator : public Evaluator {
   std::shared_ptr<const LatticeTable> lattice_;
   std::vector<int> plattice_;
   std::vector<double> pwrap_src_, pwrap_trg_;
-  double periodic_const_ = 0.0;
+  double periodic_quad_ = 0.0, periodic_moments_[5] = {0, 0, 0, 0, 0};    // Laplace background part
   int first_level() const { return opt_.periodic ? 0 : 2; }    // first level with expansions
   void periodic_wrap(std::size_t ns, const double *&sxyz, std::size_t nt, const double *&txyz);
   void periodic_far();

@@ -223,6 +223,7 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kSqrtPi = 1.77245385090551602729;
 constexpr double kPeriod = 2.0;                    // unit cell: half-width 1
 constexpr double kVolume = 8.0;
+constexpr double kRealCut = 2.3;                   // Ewald real-space terms beyond: < exp(-47)
 
 // Ewald split (or direct image sum) of the unit-cell lattice sum of one kernel.
 struct Split {
@@ -292,11 +293,11 @@ struct Split {
 
 // Real-space part at r over images |n|_inf <= nreal; `regular`: the n = 0 term without the
 // bare kernel (limit at r = 0); `near_regular`: every |n|_inf <= 1 term without the bare kernel.
-void real_sum(const Split &s, const double r[3], bool regular, bool near_regular, double &v, double g[3])
+void real_sum(const Split &s, const double r[3], bool regular, bool near_regular, double &v, double g[3],
+              int N)
 {
   v = 0;
   g[0] = g[1] = g[2] = 0;
-  const int N = s.nreal;
   for (int nx = -N; nx <= N; ++nx)
     for (int ny = -N; ny <= N; ++ny)
       for (int nz = -N; nz <= N; ++nz) {
@@ -317,6 +318,7 @@ void real_sum(const Split &s, const double r[3], bool regular, bool near_regular
           if (reg) v += s.reg0();
           continue;
         }
+        if (!reg && rr > kRealCut) continue;    // erfc(alpha r) and the Yukawa terms < 1e-20
         double t, F;
         s.real(rr, reg, t, F);
         v += t;
@@ -356,8 +358,11 @@ double recip_sum(const Split &s, const double r[3], double g[3])
 void periodic_green_unit(const KernelSpec &k, const double r[3], bool regular, double &value, double grad[3])
 {
   const Split s(k);
-  double gr[3], gk[3];
-  real_sum(s, r, regular, false, value, gr);
+  double gr[3], gk[3], rf[3];
+  // fold into [-1, 1]^3 (the regular form keeps r: its n = 0 term is the one at r)
+  for (int d = 0; d < 3; ++d) rf[d] = regular ? r[d] : r[d] - kPeriod * std::nearbyint(r[d] / kPeriod);
+  r = rf;
+  real_sum(s, r, regular, false, value, gr, regular ? 3 : s.nreal);
   value += recip_sum(s, r, gk) + s.background();
   for (int d = 0; d < 3; ++d) grad[d] = gr[d] + gk[d];
 }
@@ -369,6 +374,7 @@ std::shared_ptr<LatticeTable> compute_table(const KernelSpec &k, int p)
   const Split s(k);
   auto t = std::make_shared<LatticeTable>();
   t->p = p;
+  t->quad = k.type == KernelType::Laplace ? 2 * kPi / (3 * kVolume) : 0.0;
   const int m = 2 * p - 1;
   t->r.assign((std::size_t) m * m * m, 0.0);
   const double step = p > 1 ? 2.0 * kRadiusInner / (p - 1) : 0.0;
@@ -378,11 +384,12 @@ std::shared_ptr<LatticeTable> compute_table(const KernelSpec &k, int p)
       for (int l = j; l < p; ++l) {
         const double r[3] = {i * step, j * step, l * step};
         double v, g[3];
-        real_sum(s, r, true, true, v, g);
+        real_sum(s, r, true, true, v, g, s.nreal);
         if (!s.direct) {
           double gk[3];
           v += recip_sum(s, r, gk) + s.background();
         }
+        v -= t->quad * (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
         const int a[3] = {i, j, l};
         const int perm[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
         for (auto &pm : perm)
@@ -472,9 +479,12 @@ void periodic_direct_sum(const KernelSpec &kernel, const double center[3], doubl
     for (std::size_t j = 0; j < n_src; ++j) {
       if (src_q[j] == 0.0) continue;
       double r[3], t, gg[3];
-      for (int d = 0; d < 3; ++d) r[d] = tu[3 * i + d] - su[3 * j + d];
+      for (int d = 0; d < 3; ++d) {
+        r[d] = tu[3 * i + d] - su[3 * j + d];
+        r[d] -= kPeriod * std::nearbyint(r[d] / kPeriod);    // [-1, 1]: |n| <= 1 covers r < 3
+      }
       const bool same = r[0] == 0.0 && r[1] == 0.0 && r[2] == 0.0;
-      real_sum(s, r, same, false, t, gg);
+      real_sum(s, r, same, false, t, gg, s.direct ? 2 : 1);
       v += src_q[j] * t;
       for (int d = 0; d < 3; ++d) g[d] += src_q[j] * gg[d];
     }

@@ -13,10 +13,11 @@
 //    G_per is the Ewald sum (Laplace: tin-foil, k = 0 omitted, with the -pi/(V alpha^2)
 //    constant, i.e. a uniform neutralizing background for a net charge; Yukawa: the
 //    absolutely convergent lattice sum, by a screened Ewald split or directly).
-//  * Laplace only: R is not harmonic (lap R = 4 pi / V, the background), R = H + (2pi/3V)|r|^2;
-//    the equivalent density reproduces the harmonic part and the monopole and dipole, so the
-//    far field is exact up to a constant (2pi/3V)(sum_j q_j |y_j-c|^2 - sum_k u_k |e_k-c|^2),
-//    which is added to the potential (it changes the energy of non-neutral systems only).
+//  * Laplace only: R is not harmonic (lap R = 4 pi / V, the background), R = H + (2pi/3V)|r|^2.
+//    The root operator uses H (harmonic: equivalent densities reproduce it, and the downward
+//    equivalent density can carry it); the quadratic part, whose potential
+//    (2pi/3V) sum_j q_j |x - y_j|^2 is not harmonic when the net charge is not zero, is added
+//    at the targets exactly from the net charge, dipole and second moment of the sources.
 #pragma once
 
 #include "interaction_lists.h"
@@ -59,9 +60,13 @@ void wrap_into_cell(std::size_t n, const double *xyz, const double center[3], do
 // Far-image operator table of the unit root (half-width 1, period 2) for order p:
 // r[((i+p-1)*m + j+p-1)*m + k+p-1] = R((i,j,k) * 2*1.05/(p-1)), m = 2p-1. For a root of
 // half-width h the physical operator is R_unit / h (Laplace; Yukawa with kappa_unit = kappa h).
+// Laplace: R = H + quad |r|^2 (quad = 2 pi / 3V, the uniform background, not harmonic); the
+// table holds the harmonic H (reproduced by equivalent densities), the quadratic part is added
+// at the targets from the sources' charge, dipole and second moment (exact).
 struct LatticeTable {
   int p = 0;
   std::vector<double> r;
+  double quad = 0.0;    // unit cell (V = 8): pi / 12 for Laplace, 0 for Yukawa
 };
 std::shared_ptr<const LatticeTable> lattice_table(const KernelSpec &unit_kernel, int p);
 

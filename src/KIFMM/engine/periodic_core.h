@@ -95,19 +95,20 @@ template <class K> void FmmEvaluator<K>::periodic_far()
     chk[i] += s * acc;
   }
   has_local_[0] = 1;
-  // Laplace: the lattice operator's non-harmonic part (2 pi / 3V) |r|^2 is not carried by the
-  // equivalent density beyond monopole and dipole: the rest is a constant potential
-  periodic_const_ = 0.0;
-  if constexpr (std::is_same_v<K, LaplaceKernel>) {
+  // Laplace: the lattice operator's quadratic part (2pi/3V) sum_j q_j |x - y_j|^2, from the
+  // moments of the sources about the cell center (applied at the targets in periodic_near)
+  periodic_quad_ = lattice_->quad / (h0 * h0 * h0);
+  for (double &v : periodic_moments_) v = 0.0;
+  if (periodic_quad_ != 0.0) {
     const double *c = tree_.root.center;
-    double s1 = 0, s2 = 0;
     for (std::size_t j = 0; j < sq_.size(); ++j) {
       const double dx = sx_[j] - c[0], dy = sy_[j] - c[1], dz = sz_[j] - c[2];
-      s1 += sq_[j] * (dx * dx + dy * dy + dz * dz);
+      periodic_moments_[0] += sq_[j];
+      periodic_moments_[1] += sq_[j] * dx;
+      periodic_moments_[2] += sq_[j] * dy;
+      periodic_moments_[3] += sq_[j] * dz;
+      periodic_moments_[4] += sq_[j] * (dx * dx + dy * dy + dz * dz);
     }
-    for (int k = 0; k < nsurf_; ++k)
-      s2 += u[k] * h0 * h0 * (inner_.x[k] * inner_.x[k] + inner_.y[k] * inner_.y[k] + inner_.z[k] * inner_.z[k]);
-    periodic_const_ = 2.0 * 3.14159265358979323846 / (3.0 * L * L * L) * (s1 - s2);
   }
 }
 
@@ -165,8 +166,18 @@ template <class K> void FmmEvaluator<K>::periodic_near(bool want_pot)
         }
     }
   }
-  if (want_pot && periodic_const_ != 0.0)
-    for (double &v : tp_) v += periodic_const_;
+  if (periodic_quad_ != 0.0) {
+    // a sum_j q_j |x - y_j|^2 = a (Q |x-c|^2 - 2 (x-c).D + S2); gradient 2a (Q (x-c) - D)
+    const double a = periodic_quad_, *m = periodic_moments_, *c = tree_.root.center;
+#pragma omp parallel for schedule(static)
+    for (std::size_t i = 0; i < tp_.size(); ++i) {
+      const double dx = tx_[i] - c[0], dy = ty_[i] - c[1], dz = tz_[i] - c[2];
+      if (want_pot) tp_[i] += a * (m[0] * (dx * dx + dy * dy + dz * dz) - 2 * (dx * m[1] + dy * m[2] + dz * m[3]) + m[4]);
+      tgx_[i] += 2 * a * (m[0] * dx - m[1]);
+      tgy_[i] += 2 * a * (m[0] * dy - m[2]);
+      tgz_[i] += 2 * a * (m[0] * dz - m[3]);
+    }
+  }
 }
 
 }    // namespace kifmm

@@ -365,6 +365,7 @@ void FixClumpRigid::write_bodies_file()
 
     struct Shape {
       std::vector<Vec3> ref;    // pebble centres relative to their centroid
+      double spread;            // sum of |ref|^2 (rotation invariant, quick pre-check)
       double mass, volume, rel_error;
       Vec3 com;      // relative to the centroid
       Mat3 inertia;  // about the COM
@@ -408,8 +409,13 @@ void FixClumpRigid::write_bodies_file()
         break;
       }
       std::vector<Vec3> rel(np);
+      double spread = 0.0;
       for (int k = 0; k < np; ++k)
-        for (int d = 0; d < 3; ++d) rel[k][d] = x[k][d] - g[d];
+        for (int d = 0; d < 3; ++d) {
+          rel[k][d] = x[k][d] - g[d];
+          spread += rel[k][d] * rel[k][d];
+        }
+      const double match = 1e-4 * rmin;    // rms distance for "same shape"
 
       // reuse a computed shape if this clump is a rotated copy of it
       double mass = 0.0, rel_error = 0.0;
@@ -418,9 +424,12 @@ void FixClumpRigid::write_bodies_file()
       bool found = false;
       auto &candidates = cache[key];
       for (const Shape &sh : candidates) {
+        // |sqrt(spread) - sqrt(sh.spread)| <= rms-fit residual * sqrt(np)
+        if (std::fabs(std::sqrt(spread) - std::sqrt(sh.spread)) > match * std::sqrt((double) np))
+          continue;
         double rms;
         Mat3 rot = clump::best_rotation(sh.ref, rel, rms);
-        if (rms > 1e-4 * rmin) continue;
+        if (rms > match) continue;
         Vec3 c = clump::matvec(rot, sh.com);
         for (int d = 0; d < 3; ++d) com[d] = g[d] + c[d];
         inertia = clump::matmul(clump::matmul(rot, sh.inertia), clump::transpose(rot));
@@ -436,6 +445,7 @@ void FixClumpRigid::write_bodies_file()
         clump::MassProperties p = clump::union_mass_properties(sl, density, tol);
         Shape sh;
         sh.ref = rel;
+        sh.spread = spread;
         sh.mass = p.mass;
         sh.volume = p.volume;
         sh.rel_error = p.rel_error;

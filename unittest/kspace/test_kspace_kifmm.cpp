@@ -551,6 +551,20 @@ TEST_F(MpiEqualsSerial, Brick)
   check_force_reference(REFERENCE_DIR "/kifmm_mpi_clustered.yaml");
 }
 
+// all atoms inside one rank's domain (a collapsed planetoid in a corner): other ranks are empty
+TEST_F(MpiEqualsSerial, AllAtomsOnOneRank)
+{
+  Configuration c = plummer(2000, 41, 0.02);
+  for (auto &x : c.x)
+    for (double &v : x) v = 0.1 + 0.2 * (v - 0.5);
+  for (double &q : c.q) q *= 1e-4;
+  int me = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &me);
+  if (me == 0) write_charge_data(data_path, c);
+  MPI_Barrier(MPI_COMM_WORLD);
+  check_force_reference(REFERENCE_DIR "/kifmm_mpi_one_rank.yaml");
+}
+
 TEST_F(MpiEqualsSerial, Rcb)
 {
   check_force_reference(REFERENCE_DIR "/kifmm_mpi_clustered_rcb.yaml");

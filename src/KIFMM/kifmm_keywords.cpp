@@ -113,6 +113,15 @@ std::string parse_kifmm_keywords(const std::vector<std::string> &args, KIFMMSett
       s.check_every = every;
       s.check_samples = n;
       i += 3;
+    } else if (kw == "jeans") {
+      if (i + 1 >= args.size()) return who + "keyword 'jeans' needs a value: yes or no";
+      if (args[i + 1] == "yes")
+        s.jeans = true;
+      else if (args[i + 1] == "no")
+        s.jeans = false;
+      else
+        return who + "jeans '" + args[i + 1] + "' must be yes or no";
+      i += 2;
     } else if (kw == "cache") {
       if (i + 1 >= args.size()) return who + "keyword 'cache' needs a directory or 'none'";
       s.cache_dir = args[i + 1];

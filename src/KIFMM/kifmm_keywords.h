@@ -20,6 +20,7 @@ struct KIFMMSettings {
   int check_every = 0;       // 0 = off; else measure the error every N steps
   int check_samples = 0;
   std::string cache_dir;     // "" = default location; "none" = in-memory only
+  bool jeans = false;        // gravity + periodic boundaries: uniform negative background
 };
 
 constexpr int kifmm_min_order = 2;

@@ -1,6 +1,7 @@
 #include "kspace_kifmm.h"
 
 #include "fix_kifmm_stride.h"
+#include "periodic.h"
 
 #include "atom.h"
 #include "comm.h"
@@ -102,10 +103,6 @@ void KSpaceKIFMM::init()
 {
   if (domain->triclinic)
     error->all(FLERR, "kspace_style kifmm does not support triclinic boxes");
-  if (domain->xperiodic || domain->yperiodic || domain->zperiodic)
-    error->all(FLERR,
-               "kspace_style kifmm: periodic boundaries are not supported yet; use boundary "
-               "f, s or m in every dimension");
   if (kset.kernel == LongRangeKernel::Gravity) {
     if (!atom->rmass_flag && !atom->mass)
       error->all(FLERR, "kspace_style kifmm kernel gravity requires per-atom or per-type masses");
@@ -120,6 +117,7 @@ void KSpaceKIFMM::init()
   qqrd2e = force->qqrd2e;
   scale = 1.0;
   if (kset.kernel != LongRangeKernel::Gravity) qsum_qsq(0);
+  periodic_init();    // p p p: checks, net-charge warning (kspace_kifmm_periodic.cpp)
 
   // a coulomb pair style would count coulomb a second time (kifmm sums everything)
   if (force->pair && kset.kernel != LongRangeKernel::Gravity && comm->me == 0 &&
@@ -151,8 +149,9 @@ void KSpaceKIFMM::init()
   else
     opt.cache_dir = kset.cache_dir.empty() ? default_cache_dir() : kset.cache_dir;
 
+  opt.periodic = periodic;
   if (!engine || engine_options.order != opt.order || engine_options.leaf_size != opt.leaf_size ||
-      engine_options.cache_dir != opt.cache_dir) {
+      engine_options.cache_dir != opt.cache_dir || engine_options.periodic != opt.periodic) {
     engine = kifmm::make_evaluator(kernel, opt);
     reported_first_evaluation = false;
   }
@@ -328,8 +327,9 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   const std::size_t nsrc = source_strength().size();
   const double *sx = source_xyz().data(), *ss = source_strength().data();
 
+  if (periodic) periodic_cell();    // the box is the cell (it may have changed)
   check_memory(nsrc);
-  const bool want_potential = eflag_global || eflag_atom || keep;
+  const bool want_potential = eflag_global || eflag_atom || keep || (periodic && vflag_global);
   pot.assign(want_potential ? n : 0, 0.0);
   grad.assign(3 * n, 0.0);
   if (nsrc > 0)
@@ -377,8 +377,12 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   // reduction over ranks), as in the KSPACE styles
   if (eflag_global || keep) MPI_Allreduce(&e_local, &energy, 1, MPI_DOUBLE, MPI_SUM, world);
   if (vflag_global || keep) MPI_Allreduce(v_local, virial, 6, MPI_DOUBLE, MPI_SUM, world);
+  if (periodic && (vflag_global || keep)) periodic_virial(e_local);
   if (action == Stride::Evaluate) stride->end_evaluation(energy, virial);
 
+  if (vflag_atom && periodic)
+    error->all(FLERR, "kspace_style kifmm: per-atom virial (compute stress/atom) is not available "
+               "with periodic boundaries");
   if (vflag_atom && nsrc > 0) {
     double center[3] = {0, 0, 0};
     per_atom_virial(cf, center);
@@ -462,7 +466,11 @@ void KSpaceKIFMM::check_error()
   std::vector<double> txyz(3 * sample.size()), exact(3 * sample.size(), 0.0);
   for (std::size_t k = 0; k < sample.size(); ++k)
     for (int d = 0; d < 3; ++d) txyz[3 * k + d] = xyz[3 * sample[k] + d];
-  if (!sample.empty())
+  if (!sample.empty() && periodic)    // Ewald reference (engine/periodic.h)
+    kifmm::periodic_direct_sum(engine->kernel(), engine->options().root_center,
+                               engine->options().root_half_width, all_s.size(), all_xyz.data(),
+                               all_s.data(), sample.size(), txyz.data(), nullptr, exact.data());
+  else if (!sample.empty())
     kifmm::direct_sum(engine->kernel(), all_s.size(), all_xyz.data(), all_s.data(), sample.size(),
                       txyz.data(), nullptr, exact.data());
   double sums[2] = {0, 0};

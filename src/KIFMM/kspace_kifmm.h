@@ -62,6 +62,12 @@ class KSpaceKIFMM : public KSpace {
   void report_first_evaluation();
   void report_coincident_pairs(std::size_t local_pairs);
   void check_memory(std::size_t nsources);
+  // periodic boundaries (kspace_kifmm_periodic.cpp)
+  bool periodic = false;
+  bool warned_periodic_virial = false;
+  void periodic_init();
+  void periodic_cell();
+  void periodic_virial(double e_local);
 
   // fix kifmm/stride attaches itself at its init (after this init, which detaches it)
   class FixKIFMMStride *stride = nullptr;

@@ -1,0 +1,94 @@
+// Periodic boundaries of kspace_style kifmm (boundary p p p, cubic box): checks at init, the
+// periodic cell handed to the engine at every evaluation (boxes that change size), the
+// virial. The lattice sums themselves are in the engine (engine/periodic.h).
+#include "kspace_kifmm.h"
+
+#include "comm.h"
+#include "domain.h"
+#include "error.h"
+#include "update.h"
+
+#include <cmath>
+#include <mpi.h>
+
+using namespace LAMMPS_NS;
+using kifmm_lammps::LongRangeKernel;
+
+namespace {
+const char *boundary_name(int code)
+{
+  switch (code) {
+    case 0:
+      return "p";
+    case 1:
+      return "f";
+    case 2:
+      return "s";
+    default:
+      return "m";
+  }
+}
+}    // namespace
+
+void KSpaceKIFMM::periodic_init()
+{
+  periodic = domain->xperiodic || domain->yperiodic || domain->zperiodic;
+  if (!periodic) return;
+  if (!(domain->xperiodic && domain->yperiodic && domain->zperiodic))
+    error->all(FLERR,
+               "kspace_style kifmm: periodic boundaries are not supported yet for mixed "
+               "periodicity (boundary {} {} {}); use p p p, or f, s or m in every dimension",
+               boundary_name(domain->boundary[0][0]), boundary_name(domain->boundary[1][0]),
+               boundary_name(domain->boundary[2][0]));
+  if (kset.kernel == LongRangeKernel::Gravity && !kset.jeans)
+    error->all(FLERR,
+               "kspace_style kifmm: kernel gravity with periodic boundaries diverges (the mean "
+               "density is not zero); use 'kspace_modify kifmm jeans yes' to subtract it "
+               "(uniform negative background, Jeans swindle)");
+  periodic_cell();
+  // net charge: like ewald/pppm, a uniform neutralizing background (energy included)
+  if (kset.kernel == LongRangeKernel::Coulomb && std::fabs(qsum) > 1.0e-5 && comm->me == 0)
+    error->warning(FLERR,
+                   "kspace_style kifmm: periodic system with net charge {:.8g}: a uniform "
+                   "neutralizing background is included (energy -pi Q^2/(2 V alpha^2) as in "
+                   "kspace_style ewald/pppm)",
+                   qsum);
+}
+
+// The box is the periodic cell: cubic (within 1e-10 relative), handed to the engine at every
+// evaluation so that fix deform, fix npt and change_box are followed.
+void KSpaceKIFMM::periodic_cell()
+{
+  const double lx = domain->xprd, ly = domain->yprd, lz = domain->zprd;
+  const double tol = 1e-10 * std::max(lx, std::max(ly, lz));
+  if (std::fabs(lx - ly) > tol || std::fabs(lx - lz) > tol)
+    error->all(FLERR,
+               "kspace_style kifmm: periodic boundaries need a cubic box; the box lengths are "
+               "{:.10g} {:.10g} {:.10g} (step {})",
+               lx, ly, lz, update->ntimestep);
+  if (!engine) return;
+  const double center[3] = {0.5 * (domain->boxlo[0] + domain->boxhi[0]),
+                            0.5 * (domain->boxlo[1] + domain->boxhi[1]),
+                            0.5 * (domain->boxlo[2] + domain->boxhi[2])};
+  engine->set_root(center, 0.5 * lx);
+}
+
+// Global virial of the periodic system. Coulomb and gravity are homogeneous of degree -1 in all
+// lengths (positions and cell; the tin-foil sum and the background term included), so the trace
+// of the virial equals the energy: W_xx = W_yy = W_zz = U/3 gives the exact scalar pressure.
+// The anisotropic part is not computed (off-diagonal 0). Yukawa: not computed (0, warning).
+void KSpaceKIFMM::periodic_virial(double e_local)
+{
+  for (int k = 0; k < 6; ++k) virial[k] = 0.0;
+  if (kset.kernel == LongRangeKernel::Yukawa) {
+    if (!warned_periodic_virial && comm->me == 0)
+      error->warning(FLERR,
+                     "kspace_style kifmm: the virial of periodic yukawa is not computed (0); "
+                     "the pressure has no long-range part");
+    warned_periodic_virial = true;
+    return;
+  }
+  double u = 0.0;
+  MPI_Allreduce(&e_local, &u, 1, MPI_DOUBLE, MPI_SUM, world);
+  virial[0] = virial[1] = virial[2] = u / 3.0;
+}

@@ -1,0 +1,364 @@
+// kspace_style kifmm with boundary p p p against LAMMPS's kspace_style ewald (tin-foil).
+//
+// Reference: LAMMPS ewald's k-space part (forces, and energy with its self and net-charge
+// background terms; pair coul/long with `pair_modify compute no` only supplies the cutoff) plus
+// the real-space sum erfc(alpha r)/r computed here with libm's erfc. LAMMPS's own pair
+// coul/long approximates erfc by a polynomial (absolute error up to ~1e-7) or by float-indexed
+// tables, so the complete LAMMPS ewald + coul/long is exact only to ~1e-6; that agreement is
+// tested separately. Data files are written by rank 0 (atom IDs independent of the rank count);
+// ctest also runs this binary on 2 and 4 ranks.
+#include "configurations.h"
+#include "kspace_kifmm.h"
+#include "lammps_fixture.h"
+
+#include "atom.h"
+#include "domain.h"
+#include "force.h"
+#include "kspace.h"
+#include "lammps.h"
+
+#include <cmath>
+#include <cstdio>
+#include <mpi.h>
+
+using namespace kifmm_test;
+
+namespace {
+
+struct Result {
+  std::map<int, Vec3> f;
+  double energy = 0;
+};
+
+double rel(double a, double b)
+{
+  return std::fabs(a - b) / std::fabs(b);
+}
+
+int rank()
+{
+  int me = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &me);
+  return me;
+}
+
+class Periodic : public LammpsFixture {
+ protected:
+  std::string data_path;
+  std::vector<double> charge;    // by atom ID - 1
+
+  void SetUp() override
+  {
+    LammpsFixture::SetUp();
+    std::string name = testing::UnitTest::GetInstance()->current_test_info()->name();
+    for (char &c : name)
+      if (c == '/') c = '_';
+    data_path = "kifmm_periodic_" + name + ".data";
+  }
+  void TearDown() override
+  {
+    MPI_Barrier(MPI_COMM_WORLD);
+    if (rank() == 0) std::remove(data_path.c_str());
+    LammpsFixture::TearDown();
+  }
+
+  void load(const Configuration &c, const std::string &boundary = "p p p")
+  {
+    if (rank() == 0) write_charge_data(data_path, c);
+    MPI_Barrier(MPI_COMM_WORLD);
+    charge = c.q;
+    commands("units lj\natom_style charge\nboundary " + boundary + "\natom_modify map array\n"
+             "read_data " + data_path + "\nthermo_style custom step pe elong press\n"
+             "thermo_modify norm no\nneighbor 0.05 bin\nneigh_modify one 20000 page 400000\n");
+  }
+
+  double box_length() { return lmp->domain->xprd; }
+
+  // LAMMPS ewald k-space part + exact real space (see the file comment). alpha*L = 9 and
+  // kmax = 20 converge both parts to ~1e-16.
+  Result ewald_reference()
+  {
+    const double L = box_length(), alpha = 9.0 / L, rc = 0.7 * L;
+    commands(fmt_cmd("pair_style coul/long {}\npair_coeff * *\npair_modify compute no\n"
+                     "kspace_style ewald 1e-14\nkspace_modify gewald {} kmax/ewald 20 20 20\nrun 0 post no",
+                     rc, alpha));
+    Result r{forces_by_id(), thermo("elong")};
+    EXPECT_DOUBLE_EQ(lmp->force->kspace->g_ewald, alpha);
+    // real space: sum over pairs and images within rc (rc < L: minimum image shell n in {-1,0,1}^3)
+    auto x = positions_by_id();
+    const int n = (int) x.size();
+    std::vector<Vec3> pos(n);
+    for (auto &[id, p] : x) pos[id - 1] = p;
+    double e = 0;
+    std::vector<Vec3> f(n, Vec3{0, 0, 0});
+    const double c2 = 2 * alpha / std::sqrt(M_PI);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j)
+        for (int a = -1; a <= 1; ++a)
+          for (int b = -1; b <= 1; ++b)
+            for (int c = -1; c <= 1; ++c) {
+              if (i == j && a == 0 && b == 0 && c == 0) continue;
+              const double d[3] = {pos[i][0] - pos[j][0] + a * L, pos[i][1] - pos[j][1] + b * L,
+                                   pos[i][2] - pos[j][2] + c * L};
+              const double r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2], rr = std::sqrt(r2);
+              if (rr > rc) continue;
+              const double qq = charge[i] * charge[j];
+              e += 0.5 * qq * std::erfc(alpha * rr) / rr;
+              const double fr = qq * (std::erfc(alpha * rr) / r2 + c2 * std::exp(-alpha * alpha * r2) / rr) / rr;
+              for (int k = 0; k < 3; ++k) f[i][k] += fr * d[k];
+            }
+    for (auto &[id, v] : r.f)
+      for (int k = 0; k < 3; ++k) v[k] += f[id - 1][k];
+    r.energy += e;
+    command("pair_modify compute yes");
+    return r;
+  }
+
+  Result kifmm(const std::string &accuracy, const std::string &modify = "")
+  {
+    commands("kspace_style none\npair_style zero 0.01\npair_coeff * *\nkspace_style kifmm " + accuracy);
+    if (!modify.empty()) command("kspace_modify kifmm " + modify);
+    command("run 0 post no");
+    return {forces_by_id(), thermo("elong")};
+  }
+
+  template <class... A> static std::string fmt_cmd(const char *f, A... a)
+  {
+    std::string s(f);
+    std::vector<std::string> v{to_s(a)...};
+    for (const std::string &x : v) {
+      const size_t p = s.find("{}");
+      s.replace(p, 2, x);
+    }
+    return s;
+  }
+  static std::string to_s(double d)
+  {
+    char b[64];
+    std::snprintf(b, sizeof b, "%.17g", d);
+    return b;
+  }
+
+  // output of one command (screen) as a string
+  std::string output_of(const std::string &cmd)
+  {
+    char *buf = nullptr;
+    size_t len = 0;
+    FILE *mem = open_memstream(&buf, &len);
+    FILE *old = lmp->screen;
+    lmp->screen = mem;
+    command(cmd);
+    fflush(mem);
+    lmp->screen = old;
+    fclose(mem);
+    std::string out(buf, len);
+    free(buf);
+    return out;
+  }
+};
+
+Configuration shifted_box(Configuration c, double L)
+{
+  for (auto &x : c.x)
+    for (double &v : x) v *= L;
+  c.hi = L;
+  return c;
+}
+
+// ---------------------------------------------------------------- equal to ewald
+
+TEST_F(Periodic, NeutralRandomEqualsEwald)
+{
+  load(shifted_box(uniform_cube(1000, 41), 2.0));
+  Result ref = ewald_reference();
+  Result r = kifmm("1e-12", "order 14 leaf 40");
+  const double ef = relative_force_error(r.f, ref.f), ee = rel(r.energy, ref.energy);
+  if (rank() == 0) std::printf("  neutral random: force %.2e energy %.2e (E = %.15g)\n", ef, ee, ref.energy);
+  EXPECT_LE(ef, 1e-10);
+  EXPECT_LE(ee, 1e-10);
+}
+
+TEST_F(Periodic, NeutralDipolesEqualEwald)
+{
+  load(shifted_box(dipoles(1000, 42, 0.02), 1.0));
+  Result ref = ewald_reference();
+  Result r = kifmm("1e-12", "order 14 leaf 40");
+  const double ef = relative_force_error(r.f, ref.f), ee = rel(r.energy, ref.energy);
+  if (rank() == 0) std::printf("  dipoles: force %.2e energy %.2e\n", ef, ee);
+  EXPECT_LE(ef, 1e-10);
+  EXPECT_LE(ee, 1e-10);
+}
+
+TEST_F(Periodic, NetChargeGetsBackgroundAndWarning)
+{
+  Configuration c = uniform_cube(800, 43);
+  for (double &q : c.q) q += 0.25;    // net charge 200
+  load(c);
+  Result ref = ewald_reference();
+  commands("kspace_style none\npair_style zero 0.01\npair_coeff * *\nkspace_style kifmm 1e-12\n"
+           "kspace_modify kifmm order 14 leaf 40");
+  std::string out = output_of("run 0 post no");
+  Result r{forces_by_id(), thermo("elong")};
+  const double ef = relative_force_error(r.f, ref.f), ee = rel(r.energy, ref.energy);
+  if (rank() == 0) std::printf("  net charge 200: force %.2e energy %.2e (E = %.15g)\n", ef, ee, ref.energy);
+  EXPECT_LE(ef, 1e-10);
+  EXPECT_LE(ee, 1e-10);
+  if (rank() == 0) EXPECT_NE(out.find("neutralizing background"), std::string::npos) << out;
+}
+
+TEST_F(Periodic, CompleteLammpsEwaldWithCoulLong)
+{
+  // pair coul/long as it is (polynomial erfc): agreement limited by LAMMPS's erfc (~1e-7)
+  load(uniform_cube(1000, 44));
+  const double rc = 0.7, alpha = 9.0;
+  commands(fmt_cmd("pair_style coul/long {}\npair_coeff * *\npair_modify table 0\nkspace_style ewald 1e-14\n"
+                   "kspace_modify gewald {} kmax/ewald 20 20 20\nrun 0 post no",
+                   rc, alpha));
+  Result ref{forces_by_id(), thermo("pe")};
+  const double press_ref = thermo("press");
+  Result r = kifmm("1e-12", "order 14 leaf 40");
+  const double ef = relative_force_error(r.f, ref.f), ee = rel(r.energy, ref.energy);
+  const double ep = rel(thermo("press"), press_ref);
+  if (rank() == 0)
+    std::printf("  vs ewald + coul/long (LAMMPS erfc): force %.2e energy %.2e pressure %.2e\n", ef, ee, ep);
+  EXPECT_LE(ef, 1e-5);
+  EXPECT_LE(ee, 1e-6);
+  EXPECT_LE(ep, 1e-5) << "scalar pressure (virial trace = energy)";
+}
+
+TEST_F(Periodic, MeasuredErrorWithinRequestedAccuracy)
+{
+  Configuration c = uniform_cube(2000, 45);
+  Configuration d = dipoles(1000, 46, 0.01);
+  for (size_t i = 0; i < d.x.size(); ++i) {
+    c.x.push_back(d.x[i]);
+    c.q.push_back(d.q[i]);
+  }
+  load(c);
+  Result ref = ewald_reference();
+  for (const char *acc : {"1e-3", "1e-4", "1e-5", "1e-6", "1e-7"}) {
+    Result r = kifmm(acc);
+    const double ef = relative_force_error(r.f, ref.f), ee = rel(r.energy, ref.energy);
+    if (rank() == 0) std::printf("  accuracy %s: measured force error %.2e, energy %.2e\n", acc, ef, ee);
+    EXPECT_LE(ef, std::stod(acc)) << acc;
+    EXPECT_LE(ee, std::stod(acc)) << acc;
+  }
+}
+
+TEST_F(Periodic, CheckUsesThePeriodicReference)
+{
+  load(uniform_cube(1000, 47));
+  Result ref = ewald_reference();
+  Result r = kifmm("1e-4", "order 4 leaf 32 check 1 1000");
+  const double full = relative_force_error(r.f, ref.f), measured = evaluate("v_kifmm_error");
+  EXPECT_GT(full, 1e-7);
+  EXPECT_NEAR(measured, full, 1e-3 * full);
+}
+
+// ---------------------------------------------------------------- yukawa
+
+TEST_F(Periodic, YukawaEqualsCoulDebyeOverImages)
+{
+  // coul/debye with a cutoff beyond which exp(-kappa r) < 1e-16 sums the images exactly;
+  // kappa L/2 = 4 uses the screened-Ewald root operator, 10 the direct image sum
+  for (double kappa : {8.0, 20.0}) {
+    if (kappa != 8.0) {
+      destroy();
+      create();
+    }
+    load(uniform_cube(kappa == 8.0 ? 300 : 1000, 48));
+    const double rc = 37.0 / kappa;
+    commands(fmt_cmd("pair_style coul/debye {} {}\npair_coeff * *\nrun 0 post no", kappa, rc));
+    Result ref{forces_by_id(), thermo("pe")};
+    Result r = kifmm("1e-10", "kernel yukawa " + to_s(kappa) + " order 12 leaf 40");
+    const double ef = relative_force_error(r.f, ref.f), ee = rel(r.energy, ref.energy);
+    if (rank() == 0) std::printf("  yukawa kappa %g: force %.2e energy %.2e\n", kappa, ef, ee);
+    EXPECT_LE(ef, 1e-9);
+    EXPECT_LE(ee, 1e-9);
+  }
+}
+
+// ---------------------------------------------------------------- gravity
+
+TEST_F(Periodic, GravityJeansEqualsCoulombWithBackground)
+{
+  Configuration c = uniform_cube(500, 49);
+  c.type_mass = {1.0, 1.5, 2.0};
+  c.type.resize(c.x.size());
+  for (size_t i = 0; i < c.x.size(); ++i) {
+    c.type[i] = 1 + (int) (i % 3);
+    c.q[i] = c.type_mass[c.type[i] - 1];    // coulomb on charges = masses (net charge)
+  }
+  load(c);
+  const double G = 0.8;
+  Result coul = kifmm("1e-10", "order 12");
+  Result grav = kifmm("1e-10", "kernel gravity 0.8 jeans yes order 12");
+  for (auto &[id, f] : coul.f)
+    for (double &v : f) v *= -G;
+  EXPECT_LE(relative_force_error(grav.f, coul.f), 1e-12);
+  EXPECT_NEAR(grav.energy, -G * coul.energy, 1e-12 * std::fabs(coul.energy));
+}
+
+// ---------------------------------------------------------------- box changes
+
+TEST_F(Periodic, ChangeBoxAndFixDeformFollowTheBox)
+{
+  load(uniform_cube(800, 50));
+  // change_box: scale the box and remap the atoms, then compare with ewald on the new box
+  command("change_box all x final 0 1.3 y final 0 1.3 z final 0 1.3 remap units box");
+  Result ref = ewald_reference();
+  Result r = kifmm("1e-12", "order 14 leaf 40");
+  EXPECT_LE(relative_force_error(r.f, ref.f), 1e-10);
+  EXPECT_LE(rel(r.energy, ref.energy), 1e-10);
+  // fix deform during a run: the energy of the last step (box 1.3 -> 1.5) equals ewald there
+  commands("mass * 1.0\nvelocity all create 0.01 4321 loop geom\nfix nve all nve\n"
+           "fix grow all deform 1 x final 0 1.5 y final 0 1.5 z final 0 1.5 remap x\n"
+           "thermo 10\nrun 20 post no\nunfix grow\nunfix nve");
+  EXPECT_NEAR(box_length(), 1.5, 1e-12);
+  const double e_run = thermo("elong");
+  Result ref2 = ewald_reference();
+  if (rank() == 0) std::printf("  after fix deform: energy %.2e\n", rel(e_run, ref2.energy));
+  EXPECT_LE(rel(e_run, ref2.energy), 1e-10);
+}
+
+// ---------------------------------------------------------------- errors
+
+TEST_F(Periodic, GravityWithoutJeansIsAnError)
+{
+  load(uniform_cube(50, 51));
+  commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4\n"
+           "kspace_modify kifmm kernel gravity 1.0");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "gravity with periodic boundaries diverges.*jeans yes");
+}
+
+TEST_F(Periodic, NonCubicBoxIsAnErrorNamingTheLengths)
+{
+  load(uniform_cube(50, 52));
+  commands("change_box all y final 0 1.25 units box\npair_style zero 0.1\npair_coeff * *\n"
+           "kspace_style kifmm 1e-4");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "cubic box; the box lengths are 1 1.25 1");
+}
+
+TEST_F(Periodic, TriclinicIsAnError)
+{
+  load(uniform_cube(50, 53));
+  commands("change_box all triclinic\npair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "triclinic");
+}
+
+TEST_F(Periodic, MixedPeriodicityIsAnError)
+{
+  load(uniform_cube(50, 54), "p p f");
+  commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "mixed periodicity \\(boundary p p f\\)");
+}
+
+TEST_F(Periodic, PerAtomVirialIsAnError)
+{
+  load(uniform_cube(50, 55));
+  commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4\ncompute s all stress/atom NULL\n"
+           "compute ss all reduce sum c_s[1]\nthermo_style custom step c_ss");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "per-atom virial");
+}
+
+}    // namespace

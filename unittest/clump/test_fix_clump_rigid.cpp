@@ -11,6 +11,7 @@
 #include "atom.h"
 #include "input.h"
 #include "fix.h"
+#include "force.h"
 #include "lammps.h"
 #include "modify.h"
 
@@ -423,6 +424,65 @@ run 1000
   auto r = rows().at(1);
   EXPECT_NEAR(r[VX] / (q * 1.0 * t / m), 1.0, 2e-5);
   EXPECT_NEAR(r[VZ] / (q * -0.5 * t / m), 1.0, 2e-5);
+}
+
+// Long-range forces: with kspace kifmm (full pairwise Coulomb sum, no pair part) the clump
+// force and torque are the sums over its pebbles of the inter-clump Coulomb forces (the
+// intra-clump forces cancel), as rigid/small sums all pebble forces after kspace has added
+// them. Two charged dipole clumps, compared with the direct sum.
+TEST_F(FixClumpRigidTest, KspaceForcesOnPebblesSumIntoClumpForceAndTorque)
+{
+  const double q = 1e-6;
+  auto dq = write_molecule("dipq", {{-0.01, 0, 0, 0.005, -q}, {0, 0, 0, 0.005, 0.0},
+                                    {0.01, 0, 0, 0.005, q}});
+  commands(box_commands(0.2, "f f f"));
+  commands("molecule dq " + dq + R"(
+create_atoms 0 single 0 0 0 mol dq 11 rotate 0 0 0 1
+create_atoms 0 single 0.004 0.031 -0.006 mol dq 12 rotate 70 1 2 3
+pair_style zero 0.02
+pair_coeff * *
+kspace_style kifmm 1e-8
+fix c all clump/rigid density 2500
+run 0
+)");
+  auto x = positions_by_id();
+  ASSERT_EQ(x.size(), 6u);
+  const double qi[7] = {0, -q, 0, q, -q, 0, q};
+  const double k = lmp->force->qqrd2e;
+  auto r = rows();
+  for (int a = 0; a < 2; ++a) {
+    double f[3] = {0, 0, 0}, t[3] = {0, 0, 0};
+    const double c[3] = {r[a + 1][XU], r[a + 1][YU], r[a + 1][ZU]};
+    for (int i = 3 * a + 1; i <= 3 * a + 3; ++i) {
+      double fi[3] = {0, 0, 0};
+      for (int j = 3 * (1 - a) + 1; j <= 3 * (1 - a) + 3; ++j) {
+        double d[3] = {x[i][0] - x[j][0], x[i][1] - x[j][1], x[i][2] - x[j][2]};
+        double rr = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        for (int m = 0; m < 3; ++m) fi[m] += k * qi[i] * qi[j] * d[m] / (rr * rr * rr);
+      }
+      double arm[3] = {x[i][0] - c[0], x[i][1] - c[1], x[i][2] - c[2]};
+      for (int m = 0; m < 3; ++m) f[m] += fi[m];
+      t[0] += arm[1] * fi[2] - arm[2] * fi[1];
+      t[1] += arm[2] * fi[0] - arm[0] * fi[2];
+      t[2] += arm[0] * fi[1] - arm[1] * fi[0];
+    }
+    double fn = std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+    double tn = std::sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+    ASSERT_GT(fn, 0.0);
+    SCOPED_TRACE(a);
+    EXPECT_NEAR(r[a + 1][FX], f[0], 1e-6 * fn);
+    EXPECT_NEAR(r[a + 1][FY], f[1], 1e-6 * fn);
+    EXPECT_NEAR(r[a + 1][FZ], f[2], 1e-6 * fn);
+    EXPECT_NEAR(r[a + 1][TQX], t[0], 1e-6 * tn);
+    EXPECT_NEAR(r[a + 1][TQY], t[1], 1e-6 * tn);
+    EXPECT_NEAR(r[a + 1][TQZ], t[2], 1e-6 * tn);
+  }
+  // and they move the clumps: momentum is conserved, the clumps attract or repel
+  command("run 200");
+  auto r1 = rows();
+  double m1 = r1[1][MASS], m2 = r1[2][MASS];
+  for (int k2 : {VX, VY, VZ}) EXPECT_NEAR(m1 * r1[1][k2] + m2 * r1[2][k2], 0.0, 1e-6 * m1 * std::fabs(r1[1][VY]) + 1e-18);
+  EXPECT_GT(std::fabs(r1[1][VY]), 0.0);
 }
 
 namespace {

@@ -77,7 +77,8 @@ FixClumpRigid::FixClumpRigid(LAMMPS *lmp, int narg, char **arg) : Fix(lmp, narg,
   vector_flag = 1;
   size_vector = 4;
   global_freq = 1;
-  extvector = 1;
+  extvector = -1;    // the count is not normalized by thermo_modify norm, the energies are
+  extlist = new int[4]{0, 1, 1, 1};
 
   if (narg < 5)
     error->all(FLERR, "Illegal fix clump/rigid command: expected density <rho> or infile <file>");
@@ -149,11 +150,14 @@ FixClumpRigid::FixClumpRigid(LAMMPS *lmp, int narg, char **arg) : Fix(lmp, narg,
 
   // every pebble: radius > 0 and a molecule ID > 0 (rigid/small's infile cannot name body 0)
   int bad_radius = 0, bad_mol = 0;
+  tagint mymax = 0;
   for (int i = 0; i < atom->nlocal; ++i) {
     if (!(atom->mask[i] & groupbit)) continue;
     if (!(atom->radius[i] > 0.0)) bad_radius = 1;
     if (atom->molecule[i] <= 0) bad_mol = 1;
+    mymax = std::max(mymax, atom->molecule[i]);
   }
+  MPI_Allreduce(&mymax, &maxmol, 1, MPI_LMP_TAGINT, MPI_MAX, world);
   int any[2] = {bad_radius, bad_mol}, all[2];
   MPI_Allreduce(any, all, 2, MPI_INT, MPI_MAX, world);
   if (all[0]) error->all(FLERR, "Fix clump/rigid: every pebble needs a radius > 0");
@@ -186,6 +190,7 @@ FixClumpRigid::FixClumpRigid(LAMMPS *lmp, int narg, char **arg) : Fix(lmp, narg,
 
 FixClumpRigid::~FixClumpRigid()
 {
+  delete[] extlist;
   // the computes and the rigid fix are owned by this fix; they may already be gone when
   // LAMMPS is being destroyed or the user deleted them
   if (modify) {
@@ -329,14 +334,26 @@ void FixClumpRigid::write_bodies_file()
   const int nlocal = atom->nlocal;
   const int NV = 9;    // mol, tag, xu[3], v[3], radius
   std::vector<double> mine;
+  int late = 0;
   for (int i = 0; i < nlocal; ++i) {
     if (!(atom->mask[i] & groupbit)) continue;
+    // rigid/small made its bodies when the fix was defined; later clumps are not bodies
+    if (atom->molecule[i] > maxmol) {
+      late = 1;
+      continue;
+    }
     double xu[3];
     domain->unmap(atom->x[i], atom->image[i], xu);
     mine.insert(mine.end(), {(double) atom->molecule[i], (double) atom->tag[i], xu[0], xu[1],
                              xu[2], atom->v[i][0], atom->v[i][1], atom->v[i][2],
                              atom->radius[i]});
   }
+  int any_late = 0;
+  MPI_Allreduce(&late, &any_late, 1, MPI_INT, MPI_MAX, world);
+  if (any_late && comm->me == 0)
+    error->warning(FLERR, "Fix clump/rigid {}: pebbles with molecule IDs above {} were created "
+                   "after the fix; they are not integrated (define the fix after the clumps)",
+                   id, maxmol);
   int n = (int) mine.size(), nprocs = comm->nprocs;
   std::vector<int> counts(nprocs), displs(nprocs);
   MPI_Gather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, world);

@@ -39,10 +39,10 @@ class FixClumpRigid : public Fix {
   std::string extra_args;   // langevin / gravity keywords passed to rigid/small
   double tol = 1e-5;        // relative accuracy of the union integration
   int exclude = 1;
+  tagint maxmol = 0;         // largest clump (molecule) ID when the fix was defined
 
   std::string id_rigid, id_ke, id_erot, id_local;
   std::string bodies_file;    // infile written for rigid/small (density mode), rank 0
-  Fix *rigid = nullptr;
 
   Fix *rigid_fix();
   void setup_templates();

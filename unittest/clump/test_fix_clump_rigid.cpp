@@ -623,6 +623,26 @@ run 0
   EXPECT_NEAR(r[2][VY], 0.02, 1e-12);
 }
 
+// rigid/small makes its bodies when the fix is defined: a clump created afterwards is not a
+// body (LAMMPS's rule); the fix leaves it out of the body file (with a warning) instead of
+// handing rigid/small an unknown body ID.
+TEST_F(FixClumpRigidTest, ClumpsCreatedAfterTheFixAreLeftOut)
+{
+  commands(box_commands());
+  commands("molecule dim " + dimer_file + R"(
+create_atoms 0 single 0 0 0 mol dim 12
+pair_style zero 0.02
+pair_coeff * *
+fix c all clump/rigid density 2500
+create_atoms 0 single 0.05 0 0 mol dim 13
+run 0
+)");
+  EXPECT_EQ(evaluate("f_c[1]"), 1.0);
+  auto r = rows();
+  ASSERT_EQ(r.size(), 1u);
+  EXPECT_NEAR(r[1][MASS] / union_mass(dimer()), 1.0, 2e-5);
+}
+
 // ---------------------------------------------------------------- errors
 
 TEST_F(FixClumpRigidTest, DuplicatePebblesInTemplateAreAnError)

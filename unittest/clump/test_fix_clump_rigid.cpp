@@ -623,6 +623,53 @@ run 0
   EXPECT_NEAR(r[2][VY], 0.02, 1e-12);
 }
 
+// Explicit mass properties: infile (rigid/small's format) for existing clumps; templates must
+// then carry mass, com and inertia in their header.
+TEST_F(FixClumpRigidTest, ExplicitMassPropertiesFromInfileAndTemplateHeader)
+{
+  auto dir = scratch_dir();
+  auto infile = (dir / "bodies.txt").string();
+  std::ofstream(infile) << "# id mass x y z ixx iyy izz ixy ixz iyz vx vy vz lx ly lz ix iy iz\n"
+                           "1\n"
+                           "1 0.5 0 0 0 1e-5 2e-5 3e-5 0 0 0 0.1 0 0 0 0 0 0 0 0\n";
+  std::string text;
+  {
+    std::ifstream f(dimer_file);
+    text.assign(std::istreambuf_iterator<char>(f), {});
+  }
+  auto with_header = (dir / "dimer_header.mol").string();
+  std::string h = text;
+  h.insert(h.find("2 atoms"), "0.25 mass\n0 0 0 com\n1e-6 2e-6 2e-6 0 0 0 inertia\n");
+  std::ofstream(with_header) << h;
+  commands(box_commands());
+  commands("molecule dim " + dimer_file + "\nmolecule dimh " + with_header + R"(
+create_atoms 0 single 0 0 0 mol dim 12 rotate 0 0 0 1
+pair_style zero 0.02
+pair_coeff * *
+region slab block -0.1 0.1 -0.1 0.1 -0.1 0.1
+)");
+  command("fix c all clump/rigid infile " + infile + " mol dimh");
+  command("fix d all deposit 1 0 10 4321 region slab mol dimh rigid c near 0.02");
+  command("run 5");
+  auto r = rows();
+  ASSERT_EQ(r.size(), 2u);
+  EXPECT_DOUBLE_EQ(r[1][MASS], 0.5);
+  EXPECT_NEAR(r[1][VX], 0.1, 1e-12);
+  std::array<double, 3> in1 = {r[1][INERTIAX], r[1][INERTIAY], r[1][INERTIAZ]};
+  std::sort(in1.begin(), in1.end());
+  EXPECT_NEAR(in1[0], 1e-5, 1e-15);
+  EXPECT_NEAR(in1[2], 3e-5, 1e-15);
+  EXPECT_DOUBLE_EQ(r[2][MASS], 0.25);
+}
+
+TEST_F(FixClumpRigidTest, InfileModeNeedsTemplateMassPropertiesInHeader)
+{
+  commands(box_commands());
+  command("molecule dim " + dimer_file);
+  EXPECT_LAMMPS_ERROR(command("fix c all clump/rigid infile nofile.txt mol dim"),
+                      "molecule template dim must give mass, com and inertia in its header");
+}
+
 // rigid/small makes its bodies when the fix is defined: a clump created afterwards is not a
 // body (LAMMPS's rule); the fix leaves it out of the body file (with a warning) instead of
 // handing rigid/small an unknown body ID.

@@ -2,9 +2,10 @@
 """Check the outcome of examples/dipoles from its outputs.
 
 Asserts, as issue 8 names them: the largest aggregate (clumps connected through pebble
-contacts, pebble centres closer than 2.04 r) grows to many clumps, and the centre of mass
-falls. Thresholds (defaults): largest aggregate >= 20 clumps at the end and at least 5x its
-size at the start; zcm/L at the end below its start by more than 0.02 (out/energy.dat).
+contacts, pebble centres of different clumps closer than 2.04 r) grows to many clumps, and the
+centre of mass falls. Thresholds (defaults): largest aggregate >= 20 clumps in the last frame
+of out/clumps.dump and at least 5x its size in the first frame; zcm/L at the end below its
+start by more than 0.02 (out/energy.dat).
 
 usage: check_dipoles.py OUTDIR [--radius R] [--min-largest 20] [--min-growth 5] [--min-fall 0.02]
 """
@@ -13,18 +14,27 @@ import os
 import sys
 
 
-def read_dump(path):
+def read_frames(path):
+    """List of (timestep, [(mol, x, y, z), ...]) of a LAMMPS text dump."""
+    frames = []
     with open(path) as f:
         lines = f.read().splitlines()
-    i = next(k for k, l in enumerate(lines) if l.startswith("ITEM: ATOMS"))
-    cols = lines[i].split()[2:]
-    im, ix, iy, iz = (cols.index(c) for c in ("mol", "x", "y", "z"))
-    out = []
-    for l in lines[i + 1:]:
-        p = l.split()
-        if p:
-            out.append((int(p[im]), float(p[ix]), float(p[iy]), float(p[iz])))
-    return out
+    k = 0
+    while k < len(lines):
+        if lines[k].startswith("ITEM: TIMESTEP"):
+            step = int(lines[k + 1])
+            n = int(lines[k + 3])
+            cols = lines[k + 8].split()[2:]
+            im, ix, iy, iz = (cols.index(c) for c in ("mol", "x", "y", "z"))
+            pebbles = []
+            for l in lines[k + 9:k + 9 + n]:
+                p = l.split()
+                pebbles.append((int(p[im]), float(p[ix]), float(p[iy]), float(p[iz])))
+            frames.append((step, pebbles))
+            k += 9 + n
+        else:
+            k += 1
+    return frames
 
 
 def largest_aggregate(pebbles, cut):
@@ -87,13 +97,14 @@ def main():
     ap.add_argument("--min-growth", type=float, default=5.0)
     ap.add_argument("--min-fall", type=float, default=0.02)
     a = ap.parse_args()
-    largest, nclumps = largest_aggregate(read_dump(os.path.join(a.outdir, "final.dump")),
-                                         2.04 * a.radius)
+    frames = read_frames(os.path.join(a.outdir, "clumps.dump"))
+    l0, _ = largest_aggregate(frames[0][1], 2.04 * a.radius)
+    largest, nclumps = largest_aggregate(frames[-1][1], 2.04 * a.radius)
     head, rows = read_energy(os.path.join(a.outdir, "energy.dat"))
-    iz, il = head.index("zcm/L"), head.index("largest_aggregate_clumps")
+    iz = head.index("zcm/L")
     z0, z1 = rows[0][iz], rows[-1][iz]
-    l0 = rows[0][il]
-    print(f"clumps = {nclumps}, largest aggregate at start = {l0:g}, at end = {largest}")
+    print(f"clumps = {nclumps}, largest aggregate at step {frames[0][0]} = {l0}, "
+          f"at step {frames[-1][0]} = {largest}")
     print(f"centre of mass height zcm/L: start {z0:.4f}, end {z1:.4f}, fall {z0 - z1:.4f}")
     ok = True
     if largest < a.min_largest:

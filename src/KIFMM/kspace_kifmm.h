@@ -1,6 +1,6 @@
 // kspace_style kifmm: the full long-range sum (no real-space split) by the KIFMM engine.
 // Kernels: coulomb (atom q, qqrd2e), gravity (mass, G, attractive), yukawa (screened coulomb
-// as pair coul/debye). Open boundaries. Thin adapter: gathers the atoms of nonzero strength,
+// as pair coul/debye). Open boundaries, or p p p with a cubic box (kspace_kifmm_periodic.cpp). Thin adapter: gathers the atoms of nonzero strength,
 // calls kifmm::Evaluator, scatters forces, energy and virial. See doc/kspace_kifmm.rst.
 #pragma once
 

@@ -13,7 +13,7 @@ if [ "${KIFMM_SKIP_SANITIZERS:-0}" != "1" ]; then
   echo "== engine unit tests under ASan + UBSan =="
   asan="${build}-asan"
   cmake -S "$root" -B "$asan" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DKIFMM_ENGINE_ONLY=ON \
-        -DKIFMM_SANITIZE=ON >/dev/null
+        -DKIFMM_SANITIZE=ON -DKIFMM_BUILD_BENCH=OFF >/dev/null
   cmake --build "$asan" -j "${KIFMM_JOBS:-$(nproc)}"
   (cd "$asan" && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
      UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 OMP_NUM_THREADS=2 \

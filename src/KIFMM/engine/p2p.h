@@ -19,7 +19,7 @@
 namespace kifmm {
 
 #if defined(__AVX512F__)
-// Laplace with AVX-512: 1/sqrt from vrsqrt14pd (14 bits) refined by two Newton steps
+// Laplace with AVX-512: 1/sqrt from vrsqrt14pd (14 bits) refined by one 4th-order step
 // (relative error ~1e-16, full double accuracy), 8 sources per step, masked tail and r = 0.
 template <bool POT, bool GRAD, bool COUNT>
 inline void p2p_laplace_avx512(std::size_t nt, const double *__restrict tx, const double *__restrict ty,
@@ -28,7 +28,8 @@ inline void p2p_laplace_avx512(std::size_t nt, const double *__restrict tx, cons
                                const double *__restrict sq, double *__restrict pot, double *__restrict gx,
                                double *__restrict gy, double *__restrict gz, std::size_t *n_zero)
 {
-  const __m512d zero = _mm512_setzero_pd(), half = _mm512_set1_pd(0.5), three_half = _mm512_set1_pd(1.5);
+  const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0), c1 = _mm512_set1_pd(0.5),
+                c2 = _mm512_set1_pd(0.375), c3 = _mm512_set1_pd(0.3125);
   std::size_t zeros = 0;
   const std::size_t nfull = ns & ~std::size_t(7);
   const __mmask8 tail = (__mmask8) ((1u << (ns - nfull)) - 1u);
@@ -42,10 +43,12 @@ inline void p2p_laplace_avx512(std::size_t nt, const double *__restrict tx, cons
       if constexpr (COUNT) zeros += (std::size_t) __builtin_popcount((unsigned) (valid & ~ok));
       // masked lanes (r = 0 or past the end) may hold inf/NaN until the final masked
       // multiply sets y = 0 there
-      const __m512d h = _mm512_mul_pd(half, r2);
-      __m512d y = _mm512_rsqrt14_pd(r2);
-      y = _mm512_mul_pd(y, _mm512_fnmadd_pd(h, _mm512_mul_pd(y, y), three_half));
-      y = _mm512_maskz_mul_pd(ok, y, _mm512_fnmadd_pd(h, _mm512_mul_pd(y, y), three_half));
+      // y0 = rsqrt14(r2) (|e| < 2^-14 with e = 1 - r2 y0^2), then one 4th-order correction
+      // y = y0 (1 + e/2 + 3e^2/8 + 5e^3/16): residual ~0.27 e^4 < 4e-18, full double accuracy
+      const __m512d y0 = _mm512_rsqrt14_pd(r2);
+      const __m512d e = _mm512_fnmadd_pd(r2, _mm512_mul_pd(y0, y0), one);
+      const __m512d c = _mm512_fmadd_pd(e, _mm512_fmadd_pd(e, c3, c2), c1);
+      const __m512d y = _mm512_maskz_mov_pd(ok, _mm512_fmadd_pd(_mm512_mul_pd(y0, e), c, y0));
       const __m512d qinvr = _mm512_mul_pd(qj, y);    // q/r, 0 where masked
       if constexpr (POT) ap = _mm512_add_pd(ap, qinvr);
       if constexpr (GRAD) {

@@ -243,7 +243,12 @@ def main():
                 cmd = [args.bin, "ref", "--data", data, "--out", ref, "--clump", str(clump),
                        "--atom-style", atom_style]
                 if periodic:
-                    cmd += ["--periodic", prof.get("periodic_reference", "1e-12")]
+                    # "engine": kifmm::periodic_direct_sum (Ewald with libm erfc), sampled
+                    # above periodic_full_reference_max_n; a number: LAMMPS ewald at it
+                    pref = prof.get("periodic_reference", "engine")
+                    cmd += ["--periodic", pref]
+                    if pref == "engine" and natoms > lim["periodic_full_reference_max_n"]:
+                        cmd += ["--sample", str(lim["periodic_reference_sample"])]
                 elif natoms > lim["full_reference_max_n"]:
                     cmd += ["--sample", str(lim["reference_sample"])]
                 t0 = time.time()
@@ -273,9 +278,10 @@ def main():
             prev_n = n
             for spec in specs:
                 solver = spec.split(":")[0]
-                if solver == "direct" and natoms > lim["direct_max_n"]:
+                if solver == "direct" and natoms > lim["periodic_direct_max_n" if periodic
+                                                       else "direct_max_n"]:
                     continue
-                if solver == "coulcut" and natoms > lim["coulcut_max_n"]:
+                if solver == "coulcut" and (periodic or natoms > lim["coulcut_max_n"]):
                     continue
                 if solver in ("ewald", "pppm") and not periodic:
                     continue

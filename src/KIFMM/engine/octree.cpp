@@ -127,6 +127,37 @@ bool cells_adjacent(const Cell &a0, const Cell &b0)
   return true;
 }
 
+namespace {
+
+// Stable partition of keys[b..e) (and the parallel index array) into the 8 octants of the
+// digit at `shift`; counts[oct] receives the octant sizes.
+void partition_octants(uint64_t *keys, uint32_t *idx, uint32_t b, uint32_t e, int shift, uint32_t counts[8],
+                       std::vector<uint64_t> &tk, std::vector<uint32_t> &ti)
+{
+  for (int o = 0; o < 8; ++o) counts[o] = 0;
+  for (uint32_t i = b; i < e; ++i) ++counts[(keys[i] >> shift) & 7];
+  uint32_t pos[8], sum = 0;
+  for (int o = 0; o < 8; ++o) {
+    pos[o] = sum;
+    sum += counts[o];
+  }
+  tk.resize(e - b);
+  ti.resize(e - b);
+  for (uint32_t i = b; i < e; ++i) {
+    const uint32_t p = pos[(keys[i] >> shift) & 7]++;
+    tk[p] = keys[i];
+    ti[p] = idx[i];
+  }
+  std::copy(tk.begin(), tk.end(), keys + b);
+  std::copy(ti.begin(), ti.end(), idx + b);
+}
+
+}    // namespace
+
+// Top-down build: a cell that must split has its source and target ranges partitioned by
+// the next 3-bit Morton digit (an MSD radix sort that stops at the leaves); partitions of the
+// cells of one level run in parallel (disjoint ranges), children are appended in cell order.
+// Points end up ordered by leaf in Morton order (input order inside a leaf).
 void build_octree(Octree &tree, const RootBox &root, std::size_t n_src, const double *src_xyz,
                   std::size_t n_trg, const double *trg_xyz, int leaf_size, int max_depth)
 {
@@ -136,37 +167,62 @@ void build_octree(Octree &tree, const RootBox &root, std::size_t n_src, const do
   tree.leaves.clear();
   leaf_size = std::max(leaf_size, 1);
   max_depth = std::min(std::max(max_depth, 0), kMortonBits);
+  const bool same = src_xyz == trg_xyz && n_src == n_trg;    // one set: partition once
 
   std::vector<uint64_t> skeys, tkeys;
   morton_keys(root, n_src, src_xyz, skeys);
-  morton_keys(root, n_trg, trg_xyz, tkeys);
-  radix_sort_keys(skeys, tree.src_order);
-  radix_sort_keys(tkeys, tree.trg_order);
+  if (!same) morton_keys(root, n_trg, trg_xyz, tkeys);
+  tree.src_order.resize(n_src);
+  tree.trg_order.resize(n_trg);
+  for (std::size_t i = 0; i < n_src; ++i) tree.src_order[i] = (uint32_t) i;
+  for (std::size_t i = 0; i < n_trg; ++i) tree.trg_order[i] = (uint32_t) i;
 
   Cell rc;
   rc.src_end = (uint32_t) n_src;
   rc.trg_end = (uint32_t) n_trg;
   tree.cells.push_back(rc);
   tree.level_begin.push_back(0);
+  std::vector<uint32_t> counts;    // per cell of the level: 8 source + 8 target octant sizes
+  std::vector<char> split;
   int level = 0;
   for (;;) {
-    const int begin = tree.level_begin[level], end = (int) tree.cells.size();
+    const int begin = tree.level_begin[level], end = (int) tree.cells.size(), n = end - begin;
+    counts.assign((std::size_t) n * 16, 0);
+    split.assign(n, 0);
+    std::size_t work = 0;
     for (int ci = begin; ci < end; ++ci) {
-      Cell c = tree.cells[ci];
-      const bool split = level < max_depth &&
-          ((int) c.n_src() > leaf_size || (int) c.n_trg() > leaf_size);
-      if (!split) {
+      const Cell &c = tree.cells[ci];
+      split[ci - begin] = level < max_depth && ((int) c.n_src() > leaf_size || (int) c.n_trg() > leaf_size);
+      if (split[ci - begin]) work += c.n_src() + c.n_trg();
+    }
+    const int shift = 3 * (kMortonBits - level - 1);
+#pragma omp parallel if (work > 20000)
+    {
+      std::vector<uint64_t> tk;
+      std::vector<uint32_t> ti;
+#pragma omp for schedule(dynamic, 1)
+      for (int ci = begin; ci < end; ++ci) {
+        if (!split[ci - begin]) continue;
+        const Cell &c = tree.cells[ci];
+        uint32_t *cnt = &counts[(std::size_t) (ci - begin) * 16];
+        partition_octants(skeys.data(), tree.src_order.data(), c.src_begin, c.src_end, shift, cnt, tk, ti);
+        if (!same) partition_octants(tkeys.data(), tree.trg_order.data(), c.trg_begin, c.trg_end, shift, cnt + 8, tk, ti);
+        else
+          for (int o = 0; o < 8; ++o) cnt[8 + o] = cnt[o];
+      }
+    }
+    for (int ci = begin; ci < end; ++ci) {
+      if (!split[ci - begin]) {
         tree.leaves.push_back(ci);
         continue;
       }
-      const int shift = 3 * (kMortonBits - level - 1);
+      const Cell c = tree.cells[ci];
+      const uint32_t *cnt = &counts[(std::size_t) (ci - begin) * 16];
       uint32_t sp = c.src_begin, tp = c.trg_begin;
       const int first = (int) tree.cells.size();
       int nch = 0;
       for (int oct = 0; oct < 8; ++oct) {
-        auto digit_le = [&](uint64_t k) { return (int) ((k >> shift) & 7) <= oct; };
-        const uint32_t se = (uint32_t) (std::partition_point(skeys.begin() + sp, skeys.begin() + c.src_end, digit_le) - skeys.begin());
-        const uint32_t te = (uint32_t) (std::partition_point(tkeys.begin() + tp, tkeys.begin() + c.trg_end, digit_le) - tkeys.begin());
+        const uint32_t se = sp + cnt[oct], te = tp + cnt[8 + oct];
         if (se > sp || te > tp) {
           Cell ch;
           ch.level = level + 1;
@@ -189,13 +245,11 @@ void build_octree(Octree &tree, const RootBox &root, std::size_t n_src, const do
       tree.cells[ci].first_child = first;
       tree.cells[ci].n_children = nch;
     }
-    if ((int) tree.cells.size() == end) {
-      tree.level_begin.push_back(end);
-      break;
-    }
-    tree.level_begin.push_back(end);
+    tree.level_begin.push_back((int) tree.cells.size() > end ? end : end);
+    if ((int) tree.cells.size() == end) break;
     ++level;
   }
+  if (same) tree.trg_order = tree.src_order;
   tree.depth = (int) tree.level_begin.size() - 2;
 }
 

@@ -1,7 +1,8 @@
 // Adaptive octree over sources and targets (separate point sets, one tree).
 //
-// Points are sorted by their 63-bit Morton key (radix sort, stable), then cells are made top
-// down, level by level, from the sorted arrays: a cell is split while it holds more than
+// Points get their 63-bit Morton key; cells are made top down, level by level: a cell that
+// splits has its points partitioned by the next 3-bit key digit (an MSD radix sort that stops
+// at the leaves, parallel over the cells of a level). A cell is split while it holds more than
 // leaf_size sources or more than leaf_size targets and level < max_depth. Empty children are
 // not created. Cells are stored level by level (level_begin), the children of a cell are
 // contiguous, and every cell owns a contiguous range of the sorted sources and of the sorted
@@ -56,7 +57,8 @@ RootBox bounding_cube(std::size_t n_src, const double *src_xyz, std::size_t n_tr
 void build_octree(Octree &tree, const RootBox &root, std::size_t n_src, const double *src_xyz,
                   std::size_t n_trg, const double *trg_xyz, int leaf_size, int max_depth);
 
-// Morton keys (full depth) of points in a root box, and a stable radix sort of them.
+// Morton keys (full depth) of points in a root box, and a stable LSD radix sort of them (a full
+// sort, e.g. for partitioning by key ranges; the tree build itself partitions top down).
 void morton_keys(const RootBox &root, std::size_t n, const double *xyz, std::vector<uint64_t> &keys);
 void radix_sort_keys(std::vector<uint64_t> &keys, std::vector<uint32_t> &order);
 

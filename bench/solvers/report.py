@@ -68,6 +68,19 @@ def front(runs, key="error"):
     return out
 
 
+COMPETITORS = ("msm", "ewald", "pppm")
+
+
+def is_periodic(recs, case):
+    return any(r.get("periodic") for r in recs if r.get("case") == case)
+
+
+def competitors(recs, cases):
+    """Approximate competitors (msm, ewald, pppm) with runs in any of the cases."""
+    have = {r["solver"] for r in recs if r.get("kind") == "run" and r.get("case") in cases}
+    return [c for c in COMPETITORS if c in have]
+
+
 def floor_err(e):
     return max(e, 1e-16)
 
@@ -229,7 +242,8 @@ def make_plots(recs, outdir, cases, profile):
             ax = axes[k // ncol][k % ncol]
             ns = ns_of(recs, case)
             natoms = {n: ok_runs(recs, case, n)[0]["natoms"] for n in ns if ok_runs(recs, case, n)}
-            for solver, style in (("kifmm", "-"), ("msm", "--")):
+            for solver, style in (("kifmm", "-"), ("msm", "--"), ("ewald", "--"),
+                                  ("pppm", ":")):
                 for e, mk in zip(TARGETS, ("o", "s", "^")):
                     xs, ys = [], []
                     for n in ns:
@@ -237,7 +251,7 @@ def make_plots(recs, outdir, cases, profile):
                         if t is not None and n in natoms:
                             xs.append(natoms[n])
                             ys.append(t)
-                    if xs:
+                    if xs and (solver == "kifmm" or e != TARGETS[-1] or len(xs) > 1):
                         ax.plot(xs, ys, style, marker=mk, color=COLORS[solver], ms=4,
                                 label=f"{solver} @ {e:.0e}")
             xs, ys, xe, ye = [], [], [], []
@@ -330,11 +344,12 @@ def settings_table(recs):
 
 
 def ratio_table(recs, cases):
+    comps = competitors(recs, cases) + ["direct"]
     hdr = "| case | N |"
     sep = "|---|---|"
     for e in TARGETS:
-        hdr += f" kifmm @ {e:.0e} [s] | msm / kifmm | direct / kifmm |"
-        sep += "---|---|---|"
+        hdr += f" kifmm @ {e:.0e} [s] |" + "".join(f" {c} / kifmm |" for c in comps)
+        sep += "---|" * (1 + len(comps))
     lines = [hdr, sep]
     for case in cases:
         for n in ns_of(recs, case):
@@ -342,18 +357,20 @@ def ratio_table(recs, cases):
             if not runs:
                 continue
             row = f"| {case} | {runs[0]['natoms']} |"
-            td, fd = direct_time(recs, case, n)
             for e in TARGETS:
                 tk, fk = time_at(ok_runs(recs, case, n, "kifmm"), e)
-                tm, fm = time_at(ok_runs(recs, case, n, "msm"), e)
-                rm = ratio(tm, tk)
-                rd = ratio(td, tk)
-                # a ratio with an upper-bound time in the numerator is an upper bound, in the
-                # denominator a lower bound: mark both as approximate
-                flag_m = "~" if (fm == "<=" or fk == "<=") else ""
-                flag_d = "~" if (fd == "~" or fk == "<=") else ""
-                row += (f" {fmt_t(tk, fk)} | {fmt_ratio(rm, flag_m) if tm else 'n/r'} |"
-                        f" {fmt_ratio(rd, flag_d)} |")
+                row += f" {fmt_t(tk, fk)} |"
+                for c in comps:
+                    if c == "direct":
+                        tc, fc = direct_time(recs, case, n)
+                    else:
+                        tc, fc = time_at(ok_runs(recs, case, n, c), e)
+                    if not ok_runs(recs, case, None, c):
+                        row += " - |"
+                        continue
+                    # a ratio with a bound or an extrapolated time is marked approximate
+                    flag = "~" if (fc in ("<=", "~") or fk == "<=") else ""
+                    row += f" {fmt_ratio(ratio(tc, tk), flag) if tc else 'n/r'} |"
             lines.append(row)
     return "\n".join(lines) + "\n"
 
@@ -397,21 +414,26 @@ def summary(recs, cases):
         n = ns[-1]
         natoms = ok_runs(recs, case, n)[0]["natoms"]
         td, fd = direct_time(recs, case, n)
+        comps = [c for c in COMPETITORS if ok_runs(recs, case, None, c)]
         parts = []
         for e in TARGETS:
             tk, fk = time_at(ok_runs(recs, case, n, "kifmm"), e)
-            tm, fm = time_at(ok_runs(recs, case, n, "msm"), e)
             if tk is None:
                 parts.append(f"{e:.0e}: kifmm n/r")
                 continue
-            m = (fmt_ratio(ratio(tm, tk), "~" if "<=" in (fk, fm) else "") + " vs msm"
-                 if tm is not None else "msm n/r")
-            d = fmt_ratio(ratio(td, tk), "~" if (fd == "~" or fk == "<=") else "") \
-                if td is not None else "n/r"
-            parts.append(f"{e:.0e}: {m}, {d} vs direct")
+            items = []
+            for c in comps:
+                tc, fc = time_at(ok_runs(recs, case, n, c), e)
+                items.append(fmt_ratio(ratio(tc, tk), "~" if "<=" in (fk, fc) else "") +
+                             f" vs {c}" if tc is not None else f"{c} n/r")
+            if td is not None:
+                items.append(fmt_ratio(ratio(td, tk), "~" if (fd == "~" or fk == "<=") else "")
+                             + " vs direct")
+            parts.append(f"{e:.0e}: " + ", ".join(items))
         ref = ref_of(recs, case, n)
         samp = " (sampled reference)" if ref and ref["sampled"] < ref["natoms"] else ""
-        lines.append(f"* **{case}**, N = {natoms}{samp}: " + "; ".join(parts) + ".")
+        per = " periodic" if is_periodic(recs, case) else ""
+        lines.append(f"* **{case}**{per}, N = {natoms}{samp}: " + "; ".join(parts) + ".")
     return "\n".join(lines) + "\n"
 
 
@@ -517,7 +539,7 @@ def hard_table(recs, cases):
         for n in ns_of(recs, case):
             rs = [r for r in ok_runs(recs, case, n) if r.get("clump_error") is not None
                   and r["solver"] not in EXACT]
-            for solver in ("kifmm", "msm"):
+            for solver in ("kifmm",) + COMPETITORS:
                 for r in front([x for x in rs if x["solver"] == solver]):
                     any_row = True
                     lines.append(f"| {case} | {r['natoms']} | {r['spec']} | {fmt_e(r['error'])} | "
@@ -528,23 +550,33 @@ def hard_table(recs, cases):
 
 def clump_ratio_table(recs, cases):
     """Matched error on the clump net forces (what moves a rigid clump)."""
-    hdr = "| case | N |" + "".join(f" kifmm @ {e:.0e} [s] | msm / kifmm |" for e in TARGETS)
-    lines = [hdr, "|---|---|" + "---|---|" * len(TARGETS)]
-    any_row = False
+    cases = [c for c in cases if any(r.get("clump_error") is not None
+                                     for r in ok_runs(recs, c))]
+    if not cases:
+        return ""
+    comps = competitors(recs, cases)
+    hdr = "| case | N |" + "".join(f" kifmm @ {e:.0e} [s] |" + "".join(
+        f" {c} / kifmm |" for c in comps) for e in TARGETS)
+    lines = [hdr, "|---|---|" + ("---|" * (1 + len(comps))) * len(TARGETS)]
     for case in cases:
         for n in ns_of(recs, case):
             runs = [r for r in ok_runs(recs, case, n) if r.get("clump_error") is not None]
             if not runs:
                 continue
-            any_row = True
             row = f"| {case} | {runs[0]['natoms']} |"
             for e in TARGETS:
                 tk, fk = time_at([r for r in runs if r["solver"] == "kifmm"], e, "clump_error")
-                tm, fm = time_at([r for r in runs if r["solver"] == "msm"], e, "clump_error")
-                flag = "~" if "<=" in (fk, fm) else ""
-                row += f" {fmt_t(tk, fk)} | {fmt_ratio(ratio(tm, tk), flag) if tm else 'n/r'} |"
+                row += f" {fmt_t(tk, fk)} |"
+                for c in comps:
+                    cr = [r for r in runs if r["solver"] == c]
+                    if not cr:
+                        row += " - |"
+                        continue
+                    tc, fc = time_at(cr, e, "clump_error")
+                    flag = "~" if "<=" in (fk, fc) else ""
+                    row += f" {fmt_ratio(ratio(tc, tk), flag) if tc else 'n/r'} |"
             lines.append(row)
-    return ("\n".join(lines) + "\n") if any_row else ""
+    return "\n".join(lines) + "\n"
 
 
 def pending_list(cfg_path, profile):
@@ -567,7 +599,7 @@ def write_doc(recs, doc, plots, profile, cases_path):
     hard_cases = [c for c in cases if c not in main_cases]
     out = []
     w = out.append
-    w("# Speed versus error: kspace kifmm, LAMMPS msm and direct summation\n")
+    w("# Speed versus error: kspace kifmm, LAMMPS msm, ewald, pppm and direct summation\n")
     w("<!-- generated by bench/solvers/report.py from bench/solvers/results/results.jsonl; "
       "edit report.py, not this file -->\n")
     w(f"Profile `{profile}`. Reproduce with one command (hours on one core; resumable, runs "
@@ -576,11 +608,12 @@ def write_doc(recs, doc, plots, profile, cases_path):
       "bash bench/solvers/run.sh --quick    # N <= 1e4, minutes, report in the build directory\n"
       "bash bench/solvers/run.sh --report-only   # tables and plots from the stored results\n```\n")
     w("## Summary: kifmm's speed ratio at matched error (largest N of each case)\n")
-    w("How many times faster kifmm is than msm's best setting and than the exact direct sum "
-      "for the same measured relative force error (ratios of times measured in the same "
-      "campaign; `~`: one of the times is a bound or an N^2 extrapolation, see below; "
-      "`msm n/r`: no msm setting reached that error). Full table: "
-      "[speed ratio at matched error](#speed-ratio-at-matched-error).\n")
+    w("How many times faster kifmm is than the best setting of each LAMMPS solver (msm for "
+      "open boundaries; ewald and pppm for periodic ones) and than the exact direct sum, for "
+      "the same measured relative force error (ratios of times measured in the same "
+      "campaign; below 1x kifmm is slower; `~`: one of the times is a bound or an N^2 "
+      "extrapolation, see below; `msm n/r`: no run of that solver reached that error). Full "
+      "tables: [speed ratio at matched error](#speed-ratio-at-matched-error).\n")
     w(summary(recs, cases_of(recs)))
     w("## What is measured\n")
     w("""All solvers see the same atoms (one LAMMPS data file per configuration and N, `units lj`,
@@ -618,20 +651,38 @@ reference, in one invocation of the driver (`bench/solvers/run_bench.py` calling
   comparison is against msm's best setting for each error, not against one guess.
 * direct: `kifmm::direct_sum` (vectorized O(N^2), the same code as the reference) on all
   atoms, up to N = 120000; LAMMPS pair coul/cut (O(N^2) neighbor list) up to N = 12000.
+* **periodic cases** (`boundary p p p`, the unit cube as the cell, same configurations):
+  kifmm (periodic mode of the style) against LAMMPS `ewald` and `pppm` with
+  `pair_style coul/long C*s` (`pair_modify table 0`, accuracy A*F_rms as for msm; pppm
+  optionally `kspace_modify order`). The exact reference is `kifmm::periodic_direct_sum`:
+  an Ewald sum with libm's erfc at double accuracy (tin-foil boundary conditions, as ewald and
+  pppm), on all atoms up to N = 12000 and on 2000 sampled atoms above. It is not LAMMPS's
+  `ewald 1e-12`: pair coul/long evaluates erfc with a polynomial of error ~1e-7, so LAMMPS's
+  ewald at 1e-12 agrees with the exact sum only to 7.7e-8 (measured on 4000 uniform atoms),
+  which is also the floor of ewald and pppm in these tables. The exact solver of the periodic
+  cases (`direct`) is that Ewald sum itself (O(N^2) real space), up to N = 5000.
 * Timings are noisy (shared machine, see the load average below): the report compares
   solvers through **ratios of times measured in the same campaign**, never across machines.
 """)
     w("## Settings of this run\n")
     w(settings_table(recs))
     w("\n## Speed ratio at matched error\n")
-    w("""Time of kifmm at the error E and how many times longer msm and direct summation take
-for the same measured error (larger = kifmm faster). Each solver's time at E is interpolated
+    w("""Time of kifmm at the error E and how many times longer each other solver takes for the
+same measured error (larger = kifmm faster; `-`: solver not run on that case). Each solver's time at E is interpolated
 linearly in log(time)-log(error) between the two points of its Pareto front around E; `<=`:
 the solver's fastest run is already more accurate than E (its time is an upper bound, and a
 ratio built from it is marked `~`); `n/r`: no run of that solver reached E; `~` on direct:
 its time is extrapolated as N^2 from the largest N where it ran.
 """)
-    w(ratio_table(recs, main_cases + hard_cases))
+    allc = main_cases + hard_cases
+    open_c = [c for c in allc if not is_periodic(recs, c)]
+    per_c = [c for c in allc if is_periodic(recs, c)]
+    if open_c:
+        w("\n### Open boundaries (boundary f f f)\n")
+        w(ratio_table(recs, open_c))
+    if per_c:
+        w("\n### Periodic boundaries (boundary p p p, unit cube)\n")
+        w(ratio_table(recs, per_c))
     if "time_vs_n" in rel:
         w(f"\n![time per evaluation versus N at matched error]({rel['time_vs_n']})\n")
     w("\n## kifmm scaling with N at fixed error\n")
@@ -683,18 +734,14 @@ its time is extrapolated as N^2 from the largest N where it ran.
     w(reference_table(recs, main_cases + hard_cases))
     w("\n## Pending\n")
     pend = pending_list(cases_path, profile)
-    w("""* **Periodic boundaries** (ewald and pppm, periodic configurations, reference ewald at
-  1e-12): kspace kifmm has no periodic mode yet (it stops with an error on periodic boxes).
-  The driver already has the periodic path: `periodic: true` cases in
-  bench/solvers/cases.json run `bench_solvers ref --periodic 1e-12` (LAMMPS ewald reference)
-  and the `periodic` solver set (`ewald:acc=A`, `pppm:acc=A:cut=C`, kifmm); they are
-  `enabled: false` until periodic kifmm exists. Set `enabled` to true and rerun run.sh
-  (only the new runs are measured).
-* **Scene snapshots** (start and end states of the four example scenes): only
-  examples/charges-box exists and it does not write a data file yet. Hook: the
-  `scene_snapshots` case (`config: data`) reads LAMMPS data files listed in `files` with
-  their `atom_style`; enable it when the examples write `write_data` snapshots. Until then
-  the Plummer `collapse` case stands in for the clustered collapse end state.
+    w("""* **Scene snapshots** (start and end states of the four example scenes): the examples
+  (charges-box, dipoles, platelets, ...) do not write data-file snapshots yet, and running
+  them to their end states is a long simulation each. Hook: the `scene_snapshots` case
+  (`config: data`) reads LAMMPS data files listed in `files` with their `atom_style`; enable
+  it when the examples write `write_data` snapshots (only the new runs are measured). Until
+  then the Plummer `collapse` case stands in for the clustered collapse end state, the
+  `platelets` case for the platelet scene (open boundaries; the scene itself is periodic)
+  and `dipole3` for the dipole-clump scene.
 """)
     for name, why in pend:
         w(f"* case `{name}` of profile `{profile}` disabled: {why}\n")

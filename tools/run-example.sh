@@ -11,7 +11,7 @@ cd "$root/examples/$example"
 export OMP_NUM_THREADS="${OMP_NUM_THREADS:-1}"
 mkdir -p out
 "$build/lmp_kifmm" -in "in.$example" -var quick "$quick" -log out/log.lammps -nocite
-python3 plot_energy.py out >/dev/null
+/usr/bin/python3 plot_energy.py out >/dev/null
 echo
 echo "Example $example finished. Outputs in $root/examples/$example/out/:"
 ls -1 "$root/examples/$example/out" | sed 's/^/  /'

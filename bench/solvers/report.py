@@ -146,8 +146,26 @@ def cases_of(recs, kind="run"):
     return seen
 
 
+STATES = {"start": 0, "end": 1}
+
+
+def nkey(n):
+    """N of a series (int), or the state of a scene snapshot ("start", "end")."""
+    return (0, n, "") if isinstance(n, int) else (1, STATES.get(n, 9), str(n))
+
+
 def ns_of(recs, case):
-    return sorted({r["n"] for r in recs if r.get("kind") == "run" and r["case"] == case})
+    return sorted({r["n"] for r in recs if r.get("kind") == "run" and r["case"] == case},
+                  key=nkey)
+
+
+def nlabel(n, natoms):
+    return str(natoms) if isinstance(n, int) else f"{natoms} ({n})"
+
+
+def is_series(recs, case):
+    ns = ns_of(recs, case)
+    return len(ns) >= 2 and all(isinstance(n, int) for n in ns)
 
 
 def ref_of(recs, case, n):
@@ -220,8 +238,8 @@ def make_plots(recs, outdir, cases, profile):
             natoms = runs[0]["natoms"] if runs else n
             ref = ref_of(recs, case, n)
             sampled = ref and ref.get("sampled", natoms) < natoms
-            ax.set_title(f"{case}, N = {natoms}" + (" (sampled ref.)" if sampled else ""),
-                         fontsize=9)
+            ax.set_title(f"{case}, N = {nlabel(n, natoms)}" +
+                         (" (sampled ref.)" if sampled else ""), fontsize=9)
             ax.set_xlabel("time per force evaluation [s]")
             ax.set_ylabel("relative force error")
             ax.grid(True, which="major", lw=0.3)
@@ -233,7 +251,7 @@ def make_plots(recs, outdir, cases, profile):
         files[f"pareto_{case}"] = fn
 
     # time versus N at matched error
-    scal = [c for c in cases if len(ns_of(recs, c)) >= 2]
+    scal = [c for c in cases if is_series(recs, c)]
     if scal:
         ncol = min(len(scal), 3)
         nrow = (len(scal) + ncol - 1) // ncol
@@ -356,7 +374,7 @@ def ratio_table(recs, cases):
             runs = ok_runs(recs, case, n)
             if not runs:
                 continue
-            row = f"| {case} | {runs[0]['natoms']} |"
+            row = f"| {case} | {nlabel(n, runs[0]['natoms'])} |"
             for e in TARGETS:
                 tk, fk = time_at(ok_runs(recs, case, n, "kifmm"), e)
                 row += f" {fmt_t(tk, fk)} |"
@@ -397,7 +415,7 @@ def runs_table(recs, case):
             ce = fmt_e(r.get("clump_error")) if clumped else None
             pk = (f"{r['t_pair']:.3g} / {r['t_kspace']:.3g}" if r["solver"] not in ("direct",)
                   else "-")
-            lines.append(f"| {spec} | {r['natoms']} | {fmt_e(r['error'])} |" +
+            lines.append(f"| {spec} | {nlabel(n, r['natoms'])} | {fmt_e(r['error'])} |" +
                          (f" {ce} |" if clumped else "") +
                          f" {fmt_t(r['t_eval'])} | {pk} | {r['t_setup']:.3g} | {r['mem_mb']:.0f} |"
                          f" {r['repeats']} | ok |")
@@ -433,7 +451,8 @@ def summary(recs, cases):
         ref = ref_of(recs, case, n)
         samp = " (sampled reference)" if ref and ref["sampled"] < ref["natoms"] else ""
         per = " periodic" if is_periodic(recs, case) else ""
-        lines.append(f"* **{case}**{per}, N = {natoms}{samp}: " + "; ".join(parts) + ".")
+        lines.append(f"* **{case}**{per}, N = {nlabel(n, natoms)}{samp}: " + "; ".join(parts)
+                     + ".")
     return "\n".join(lines) + "\n"
 
 
@@ -445,7 +464,7 @@ def reference_table(recs, cases):
             r = ref_of(recs, case, n)
             if not r:
                 continue
-            lines.append(f"| {case} | {r['natoms']} | "
+            lines.append(f"| {case} | {nlabel(n, r['natoms'])} | "
                          f"{'all' if r['sampled'] >= r['natoms'] else str(r['sampled']) + ' sampled'}"
                          f" | {r['f_rms']:.4g} | {r['time']:.3g} | {r.get('clump_scale', 1):.3g} |")
     return "\n".join(lines) + "\n"
@@ -456,7 +475,7 @@ def scaling_table(recs, cases):
              "|---|---|---|---|---|"]
     for case in cases:
         ns = ns_of(recs, case)
-        if len(ns) < 2:
+        if not is_series(recs, case):
             continue
         for e in TARGETS:
             pts = []
@@ -542,8 +561,8 @@ def hard_table(recs, cases):
             for solver in ("kifmm",) + COMPETITORS:
                 for r in front([x for x in rs if x["solver"] == solver]):
                     any_row = True
-                    lines.append(f"| {case} | {r['natoms']} | {r['spec']} | {fmt_e(r['error'])} | "
-                                 f"{fmt_e(r['clump_error'])} | "
+                    lines.append(f"| {case} | {nlabel(n, r['natoms'])} | {r['spec']} | "
+                                 f"{fmt_e(r['error'])} | {fmt_e(r['clump_error'])} | "
                                  f"{r['clump_f_rms'] / r['f_rms']:.3g} | {fmt_t(r['t_eval'])} |")
     return ("\n".join(lines) + "\n") if any_row else "(no clump cases in these results)\n"
 
@@ -563,7 +582,7 @@ def clump_ratio_table(recs, cases):
             runs = [r for r in ok_runs(recs, case, n) if r.get("clump_error") is not None]
             if not runs:
                 continue
-            row = f"| {case} | {runs[0]['natoms']} |"
+            row = f"| {case} | {nlabel(n, runs[0]['natoms'])} |"
             for e in TARGETS:
                 tk, fk = time_at([r for r in runs if r["solver"] == "kifmm"], e, "clump_error")
                 row += f" {fmt_t(tk, fk)} |"
@@ -705,6 +724,14 @@ its time is extrapolated as N^2 from the largest N where it ran.
   box) as a stand-in for the end state of a gravitational collapse.
 * **highest orders**: kifmm at P = 12 and 14 (explicit `order`) on every case: the error must
   keep falling.
+* **scene snapshots** (`scene_*`, N shown with the state): the start and end states of the
+  four example scenes (charges-box, dipoles, gravity-collapse, platelets), quick variants,
+  made by bench/solvers/scene_snapshots.py, which runs a copy of each example with two added
+  `write_dump` lines (after the `run 0` that starts the production run, and at the end).
+  Charges are the scenes' q (gravity-collapse: the masses, as charges; the relative error of
+  the same linear sum does not depend on the sign), dielectric 1; platelets is periodic
+  (boundary p p p), the others open. Clump net-force errors for dipoles (3 pebbles) and
+  platelets (182 pebbles per platelet in the quick variant).
 """)
     w(hard_table(recs, hard_cases))
     crt = clump_ratio_table(recs, hard_cases)
@@ -734,14 +761,11 @@ its time is extrapolated as N^2 from the largest N where it ran.
     w(reference_table(recs, main_cases + hard_cases))
     w("\n## Pending\n")
     pend = pending_list(cases_path, profile)
-    w("""* **Scene snapshots** (start and end states of the four example scenes): the examples
-  (charges-box, dipoles, platelets, ...) do not write data-file snapshots yet, and running
-  them to their end states is a long simulation each. Hook: the `scene_snapshots` case
-  (`config: data`) reads LAMMPS data files listed in `files` with their `atom_style`; enable
-  it when the examples write `write_data` snapshots (only the new runs are measured). Until
-  then the Plummer `collapse` case stands in for the clustered collapse end state, the
-  `platelets` case for the platelet scene (open boundaries; the scene itself is periodic)
-  and `dipole3` for the dipole-clump scene.
+    w("""* **Full-size scene snapshots**: the scene cases use the quick variants of the examples
+  (1000 to 6000 atoms); the full-size scenes (10^4 to 10^5 atoms, 10^5 steps) take hours
+  each on this machine. `"full": true` in a `scene_*` case of bench/solvers/cases.json makes
+  scene_snapshots.py run the full variant (delete the case's snapshots in the work directory
+  first). The generated cases (`collapse`, `platelets`, `dipole3`) cover those sizes.
 """)
     for name, why in pend:
         w(f"* case `{name}` of profile `{profile}` disabled: {why}\n")

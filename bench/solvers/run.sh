@@ -57,16 +57,17 @@ done
 if [ "$report_only" = 0 ]; then
   if [ -z "$bin" ]; then
     if [ ! -f "$build/CMakeCache.txt" ]; then cmake -S "$root" -B "$build" >/dev/null; fi
-    make -C "$build" -j2 bench_solvers >/dev/null
+    make -C "$build" -j2 bench_solvers lmp_kifmm >/dev/null
     bin="$build/bench_solvers"
   fi
+  lmp="$(dirname "$bin")/lmp_kifmm"    # runs the example scenes for their snapshots
   if [ -z "$commit" ]; then
     commit="$(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)"
     if [ -n "$(git -C "$root" status --porcelain -- src 2>/dev/null)" ]; then commit="$commit+dirty"; fi
   fi
   export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
   "$py" "$here/run_bench.py" --profile "$profile" --bin "$bin" --work "$work" \
-    --results "$out/results.jsonl" --threads "$threads" --commit "$commit" ${only:+--only "$only"} \
+    --results "$out/results.jsonl" --threads "$threads" --commit "$commit" --lmp "$lmp" ${only:+--only "$only"} \
     ${maxn:+--max-n "$maxn"} $force
 fi
 "$py" "$here/report.py" --profile "$profile" --results "$out/results.jsonl" --plots "$out" \

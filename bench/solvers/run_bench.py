@@ -107,7 +107,9 @@ def run_child(cmd, env, timeout, mem_limit_mb, screen):
 def expand(case, sets):
     specs = []
     for s in case["solvers"]:
-        specs += sets[s] if s in sets else [s]
+        for spec in (sets[s] if s in sets else [s]):
+            if spec not in specs:
+                specs.append(spec)
     return specs
 
 
@@ -134,6 +136,7 @@ def main():
     ap.add_argument("--force", action="store_true", help="rerun runs already in the results")
     ap.add_argument("--threads", default=os.environ.get("OMP_NUM_THREADS", "1"))
     ap.add_argument("--commit", default="", help="source commit of the binary (recorded)")
+    ap.add_argument("--lmp", default="", help="lmp_kifmm, to make the scene snapshots")
     args = ap.parse_args()
 
     with open(args.cases) as f:
@@ -198,10 +201,26 @@ def main():
         if not case.get("enabled", True):
             log(f"case {name}: disabled ({case.get('pending', 'pending')})")
             continue
-        periodic = case.get("periodic", False)
         specs = expand(case, sets)
         inputs = []
-        if case["config"] == "data":
+        if case["config"] == "scene":
+            # start and end states of an example scene (scene_snapshots.py makes them once)
+            scene = case["scene"]
+            sdir = os.path.join(args.work, "scenes")
+            missing = [s for s in ("start", "end")
+                       if not os.path.exists(os.path.join(sdir, f"{scene}_{s}.json"))]
+            if missing and args.lmp and os.path.exists(args.lmp):
+                log(f"case {name}: running the scene {scene} for its snapshots")
+                subprocess.run([sys.executable, os.path.join(HERE, "scene_snapshots.py"),
+                                "--lmp", args.lmp, "--work", args.work, "--scenes", scene]
+                               + (["--full"] if case.get("full") else []), env=env)
+            for state in ("start", "end"):
+                path = os.path.join(sdir, f"{scene}_{state}.data")
+                if not os.path.exists(path):
+                    log(f"case {name}: no {state} snapshot (needs lmp_kifmm: --lmp)")
+                    continue
+                inputs.append((state, path, state))
+        elif case["config"] == "data":
             for fn in case["files"]:
                 path = os.path.join(ROOT, fn)
                 if not os.path.exists(path):
@@ -215,11 +234,13 @@ def main():
                 inputs.append((n, None, None))
         prev_n = None
         for n, given, label in inputs:
-            if args.max_n and n > args.max_n:
+            if args.max_n and isinstance(n, int) and n > args.max_n:
                 continue
             tag = f"{name}_{label or n}"
             data = given or os.path.join(args.work, "data", tag + ".data")
             meta_path = os.path.join(args.work, "data", tag + ".json")
+            if case["config"] == "scene":
+                meta_path = given[:-len(".data")] + ".json"
             atom_style = case.get("atom_style", "charge")
             if not os.path.exists(meta_path):
                 if given:
@@ -238,6 +259,7 @@ def main():
                 meta = json.load(f)
             clump = meta.get("clump", 1)
             natoms = meta["natoms"]
+            periodic = bool(case.get("periodic", False) or meta.get("periodic", False))
             ref = os.path.join(args.work, "ref", tag + ".ref")
             if ("reference", name, n, "reference") not in done or not os.path.exists(ref):
                 cmd = [args.bin, "ref", "--data", data, "--out", ref, "--clump", str(clump),
@@ -268,7 +290,7 @@ def main():
                     f"{rec['wall']:.1f} s")
             # msm at large N: only the specs that were on msm's Pareto front at the previous N
             keep_msm = None
-            if prev_n is not None and n >= lim["prune_msm_from_n"]:
+            if prev_n is not None and isinstance(n, int) and n >= lim["prune_msm_from_n"]:
                 prev = [r for (k, c, nn, s), r in done.items()
                         if k == "run" and c == name and nn == prev_n and r.get("solver") == "msm"
                         and r.get("status") == "ok"]
@@ -295,7 +317,8 @@ def main():
                 # a setting that failed at a smaller N, or whose time at the previous N scaled
                 # as N would exceed the time limit, is not run again (recorded as skipped)
                 smaller = [r for (k, c, nn, s), r in done.items()
-                           if k == "run" and c == name and s == spec and nn < n]
+                           if k == "run" and c == name and s == spec and isinstance(n, int)
+                           and isinstance(nn, int) and nn < n]
                 why = ""
                 for r in smaller:
                     if r.get("status") not in ("ok", None):

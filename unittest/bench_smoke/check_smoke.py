@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Checks of the bench_smoke test on the output of `run.sh --tiny` (open and periodic cases):
-the report has the runs table of every case with finite errors, kifmm's error falls as the requested accuracy is
-tightened, the exact solvers agree with the reference, and the ratio table is there."""
+the report has the runs table of every case with finite errors, kifmm's error falls as the
+requested accuracy is tightened, the exact solvers agree with the reference, and the ratio
+tables are there."""
 
 import json
 import math

@@ -177,12 +177,18 @@ FixClumpRigid::FixClumpRigid(LAMMPS *lmp, int narg, char **arg) : Fix(lmp, narg,
 
   // file through which rigid/small receives the union mass properties of existing clumps
   if (density > 0.0) {
-    long pid = (long) getpid();
-    MPI_Bcast(&pid, 1, MPI_LONG, 0, world);
+    // unique per process and instance (several LAMMPS instances may share a process);
+    // only rank 0's name matters: rigid/small reads its infile on rank 0
+    static int instances = 0;
+    long tag[2] = {(long) getpid(), (long) ++instances};
+    MPI_Bcast(tag, 2, MPI_LONG, 0, world);
     std::error_code ec;
     auto dir = std::filesystem::temp_directory_path(ec);
     if (ec) dir = ".";
-    bodies_file = (dir / fmt::format("lammps_clump_rigid_{}_{}.bodies", pid, id)).string();
+    std::string name = fmt::format("lammps_clump_rigid_{}_{}_{}.bodies", tag[0], tag[1], id);
+    bodies_file = (dir / name).string();
+    // the name goes into a LAMMPS command line: no whitespace
+    if (bodies_file.find_first_of(" \t\n") != std::string::npos) bodies_file = name;
   }
 }
 

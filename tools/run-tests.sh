@@ -12,7 +12,7 @@ status=0
 if [ "${KIFMM_SKIP_SANITIZERS:-0}" != "1" ]; then
   echo "== engine unit tests under ASan + UBSan =="
   asan="${build}-asan"
-  cmake -S "$root" -B "$asan" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DKIFMM_ENGINE_ONLY=ON \
+  cmake -S "$root" -B "$asan" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS=-g1 -DKIFMM_ENGINE_ONLY=ON \
         -DKIFMM_SANITIZE=ON -DKIFMM_BUILD_BENCH=OFF >/dev/null
   cmake --build "$asan" -j "${KIFMM_JOBS:-$(nproc)}"
   (cd "$asan" && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \

@@ -89,16 +89,7 @@ TEST_F(HardCases, CoincidentAtomsAreExcludedAndReported)
   commands("units lj\natom_style charge\nboundary f f f\natom_modify map array\nread_data " +
            path + "\npair_style zero 0.01\npair_coeff * *\nkspace_style kifmm 1e-7\n"
            "thermo_style custom step pe elong\nthermo_modify norm no");
-  char *buf = nullptr;
-  size_t len = 0;
-  FILE *mem = open_memstream(&buf, &len);
-  lmp->screen = mem;
-  command("run 0 post no");
-  fflush(mem);
-  lmp->screen = nullptr;
-  fclose(mem);
-  std::string out(buf, len);
-  free(buf);
+  const std::string out = captured("run 0 post no");
   EXPECT_NE(out.find("at zero distance are excluded"), std::string::npos) << out;
   EXPECT_GT(kspace()->engine_stats().coincident_pairs, 0u);
   all_finite();

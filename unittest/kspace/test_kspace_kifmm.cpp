@@ -350,16 +350,7 @@ TEST_F(KSpaceKifmm, EndOfRunPrintsTheTimeBreakdown)
   load(uniform_cube(3000, 1));
   commands("pair_style zero 0.01\npair_coeff * *\nkspace_style kifmm 1e-4\n"
            "kspace_modify kifmm leaf 64\nfix nve all nve");
-  char *buf = nullptr;
-  size_t len = 0;
-  FILE *mem = open_memstream(&buf, &len);
-  lmp->screen = mem;
-  command("run 3 post no");
-  fflush(mem);
-  lmp->screen = nullptr;
-  fclose(mem);
-  std::string out(buf, len);
-  free(buf);
+  const std::string out = captured("run 3 post no");
   EXPECT_NE(out.find("KIFMM time breakdown (4 evaluations)"), std::string::npos) << out;
   for (const char *phase : {"Tree ", "Upward ", "M2L ", "Downward ", "P2P ", "Comm "})
     EXPECT_NE(out.find(phase), std::string::npos) << phase;
@@ -372,16 +363,7 @@ TEST_F(KSpaceKifmm, CoulombPairStyleGivesDoubleCountingWarning)
 {
   load(uniform_cube(100, 1));
   commands("pair_style coul/cut 2.0\npair_coeff * *\nkspace_style kifmm 1e-4");
-  char *buf = nullptr;
-  size_t len = 0;
-  FILE *mem = open_memstream(&buf, &len);
-  lmp->screen = mem;
-  command("run 0 post no");
-  fflush(mem);
-  lmp->screen = nullptr;
-  fclose(mem);
-  std::string out(buf, len);
-  free(buf);
+  const std::string out = captured("run 0 post no");
   EXPECT_NE(out.find("counted twice"), std::string::npos) << out;
 }
 

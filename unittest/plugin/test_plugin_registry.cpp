@@ -95,21 +95,7 @@ TEST_F(PluginRegistry, FormattedErrorFromPluginStyle)
 TEST_F(PluginRegistry, FormattedLogMessage)
 {
   kifmm_lammps::plugin_load(lmp, plugin_path);
-  std::string text;
-  {
-    // capture the screen output of a formatted utils::logmesg
-    char *buf = nullptr;
-    size_t len = 0;
-    FILE *mem = open_memstream(&buf, &len);
-    FILE *old = lmp->screen;
-    lmp->screen = mem;
-    command("kifmm_test_hello 42");
-    fflush(mem);
-    lmp->screen = old;
-    fclose(mem);
-    text.assign(buf, len);
-    free(buf);
-  }
+  const std::string text = captured("kifmm_test_hello 42");
   EXPECT_NE(text.find("kifmm_test_hello: hello 42 times"), std::string::npos) << text;
 }
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# README command (b): install what is missing, build, run the whole test suite with ctest
-# (MPI tests run under mpirun --oversubscribe; root is allowed through OMPI's variables),
-# then the engine's unit tests again in an AddressSanitizer + UndefinedBehaviorSanitizer build
+# README command (b): install what is missing, build, run the engine's unit tests in an
+# AddressSanitizer + UndefinedBehaviorSanitizer build, then the whole test suite with ctest
+# (MPI tests run under mpirun --oversubscribe; root is allowed through OMPI's variables)
 # (skip that stage with KIFMM_SKIP_SANITIZERS=1; the slowest accuracy/cost tests, which run in
 # the Release suite, are left out of it to keep CI short).
 set -euo pipefail

@@ -14,6 +14,7 @@ import argparse
 import json
 import math
 import os
+import re
 import sys
 
 TARGETS = (1e-3, 1e-5, 1e-7)
@@ -391,8 +392,13 @@ def ratio_table(recs, cases):
                         tc, fc = direct_time(recs, case, n)
                     else:
                         tc, fc = time_at(ok_runs(recs, case, n, c), e)
-                    if not ok_runs(recs, case, None, c):
+                    tried = [r for r in recs if r.get("kind") == "run" and r["case"] == case
+                             and r["n"] == n and r.get("solver") == c]
+                    if not tried:
                         row += " - |"
+                        continue
+                    if not any(r["status"] == "ok" for r in tried):
+                        row += " failed |"
                         continue
                     # a ratio with a bound or an extrapolated time is marked approximate
                     flag = "~" if (fc in ("<=", "~") or fk == "<=") else ""
@@ -440,14 +446,18 @@ def summary(recs, cases):
         n = ns[-1]
         natoms = ok_runs(recs, case, n)[0]["natoms"]
         td, fd = direct_time(recs, case, n)
-        comps = [c for c in COMPETITORS if ok_runs(recs, case, None, c)]
+        comps = [c for c in COMPETITORS if any(r.get("kind") == "run" and r["case"] == case
+                                               and r.get("solver") == c for r in recs)]
         failed = {}
         for c in comps:
             rs = [r for r in recs if r.get("kind") == "run" and r["case"] == case and
                   r["n"] == n and r.get("solver") == c]
             if rs and not any(r["status"] == "ok" for r in rs):
-                why = sorted({r["status"] for r in rs})
-                failed[c] = f"{c}: all {len(rs)} settings failed ({', '.join(why)})"
+                why = set()
+                for r in rs:
+                    m = re.search(r"ERROR: ([^,(]*)", r.get("message", ""))
+                    why.add(m.group(1).strip() if m else r["status"])
+                failed[c] = f"{c}: all {len(rs)} settings failed ({'; '.join(sorted(why))})"
         parts = []
         for e in TARGETS:
             tk, fk = time_at(ok_runs(recs, case, n, "kifmm"), e)
@@ -457,7 +467,6 @@ def summary(recs, cases):
             items = []
             for c in comps:
                 if c in failed:
-                    items.append(failed[c])
                     continue
                 tc, fc = time_at(ok_runs(recs, case, n, c), e)
                 items.append(fmt_ratio(ratio(tc, tk), "~" if "<=" in (fk, fc) else "") +
@@ -469,8 +478,9 @@ def summary(recs, cases):
         ref = ref_of(recs, case, n)
         samp = " (sampled reference)" if ref and ref["sampled"] < ref["natoms"] else ""
         per = " periodic" if is_periodic(recs, case) else ""
+        tail = "".join(f" {failed[c]}." for c in comps if c in failed)
         lines.append(f"* **{case}**{per}, N = {nlabel(n, natoms)}{samp}: " + "; ".join(parts)
-                     + ".")
+                     + "." + tail)
     return "\n".join(lines) + "\n"
 
 
@@ -705,7 +715,8 @@ reference, in one invocation of the driver (`bench/solvers/run_bench.py` calling
     w(settings_table(recs))
     w("\n## Speed ratio at matched error\n")
     w("""Time of kifmm at the error E and how many times longer each other solver takes for the
-same measured error (larger = kifmm faster; `-`: solver not run on that case). Each solver's
+same measured error (larger = kifmm faster; `-`: solver not run on that case; `failed`: every
+setting of that solver failed, see the runs tables). Each solver's
 time at E is interpolated linearly in log(time)-log(error) between the two points of its
 Pareto front around E; `<=`: the solver's fastest run is already more accurate than E (its
 time is an upper bound, and a ratio built from it is marked `~`); `n/r`: no run of that
@@ -752,7 +763,10 @@ cases `direct` is the exact Ewald sum, run at N <= 5000 only.
   Charges are the scenes' q (gravity-collapse: the masses, as charges; the relative error of
   the same linear sum does not depend on the sign), dielectric 1; platelets is periodic
   (boundary p p p), the others open. Clump net-force errors for dipoles (3 pebbles) and
-  platelets (182 pebbles per platelet in the quick variant).
+  platelets (182 pebbles per platelet in the quick variant). charges-box and
+  gravity-collapse carry charges of one sign: LAMMPS's msm stops on them ("System is not
+  charge neutral"), so only kifmm and the direct sums run there. charges-box has 1000 atoms
+  in the quick variant: kifmm's octree is mostly a single leaf (a direct sum) at that size.
 """)
     w(hard_table(recs, hard_cases))
     crt = clump_ratio_table(recs, hard_cases)

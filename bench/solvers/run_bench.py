@@ -324,9 +324,10 @@ def main():
                     if r.get("status") not in ("ok", None):
                         why = f"{r['status']} at N = {r['n']}"
                     elif r.get("status") == "ok" and r.get("natoms"):
-                        cost = (r["t_setup"] + 2 * r["t_eval"]) * natoms / r["natoms"]
-                        if solver in EXACT_SOLVERS:
-                            cost *= natoms / r["natoms"]
+                        # cost ~ N (kifmm, msm, pppm), N^1.5 (ewald), N^2 (direct sums)
+                        expo = 2.0 if solver in EXACT_SOLVERS else (
+                            1.5 if solver == "ewald" else 1.0)
+                        cost = (r["t_setup"] + 2 * r["t_eval"]) * (natoms / r["natoms"]) ** expo
                         if cost > lim["timeout_s"]:
                             why = (f"predicted {cost:.0f} s from N = {r['n']} "
                                    f"(limit {lim['timeout_s']} s)")

@@ -15,8 +15,9 @@
 //   bench_solvers run --data FILE.data --ref FILE.ref --solver SPEC [--repeats R]
 //                     [--min-time T] [--clump K] [--atom-style STYLE] [--periodic]
 //       one solver: setup (`run 0`), then R timed force evaluations (pair->compute +
-//       kspace->compute, forces only), the error of the last evaluation's total forces
-//       against the reference, peak memory; prints one line "RESULT {json}"
+//       kspace->compute, forces only; wall time t_* and process CPU time c_*), the error of
+//       the last evaluation's total forces against the reference, peak memory; prints one
+//       line "RESULT {json}"
 //
 // Solver SPEC (colon-separated key=value after the name):
 //   kifmm:acc=1e-5 | kifmm:order=12[:leaf=M][:cache=none]
@@ -50,6 +51,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <fstream>
 #include <map>
 #include <mpi.h>
@@ -92,6 +94,15 @@ std::string get(const Args &a, const std::string &k, const std::string &def = ""
 double wall()
 {
   return MPI_Wtime();
+}
+
+// CPU time of the process (all its threads): with one thread, the time the evaluation
+// occupied a core, insensitive to other processes sharing the cores (wall time is not)
+double cpu()
+{
+  timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
 // --------------------------------------------------------------------------- memory
@@ -582,30 +593,34 @@ int cmd_run(const Args &a)
     throw std::runtime_error("unknown solver " + sp.name);
   }
 
-  std::vector<double> t_eval, t_pair, t_kspace;
-  double t_setup = 0;
+  std::vector<double> t_eval, t_pair, t_kspace, c_eval, c_pair, c_kspace;
+  double t_setup = 0, c_setup = 0;
   AtomsByTag g;
   if (lammps_solver) {
-    double t0 = wall();
+    double t0 = wall(), c0 = cpu();
     commands(lmp, "run 0 post no");
     t_setup = wall() - t0;
+    c_setup = cpu() - c0;
     Atom *atom = lmp->atom;
     Force *force = lmp->force;
     const double t_start = wall();
     for (int r = 0; r < 1000; ++r) {
       const int nall = atom->nlocal + (force->newton ? atom->nghost : 0);
-      double tb = wall();
+      double tb = wall(), cb = cpu();
       for (int i = 0; i < nall; ++i) atom->f[i][0] = atom->f[i][1] = atom->f[i][2] = 0.0;
-      double tp = wall();
+      double tp = wall(), cp = cpu();
       if (force->pair) force->pair->compute(0, 0);
-      double tk = wall();
+      double tk = wall(), ck = cpu();
       if (force->kspace) force->kspace->compute(0, 0);
-      double te = wall();
+      double te = wall(), ce = cpu();
       if (force->newton) lmp->comm->reverse_comm();
-      double tr = wall();
+      double tr = wall(), cr = cpu();
       t_pair.push_back(tk - tp);
       t_kspace.push_back(te - tk);
       t_eval.push_back(tr - tb);
+      c_pair.push_back(ck - cp);
+      c_kspace.push_back(ce - ck);
+      c_eval.push_back(cr - cb);
       if ((int) t_eval.size() >= min_repeats && wall() - t_start >= min_time) break;
       if (wall() - t_start > 30 * min_time && (int) t_eval.size() >= 1) break;
     }
@@ -623,7 +638,7 @@ int cmd_run(const Args &a)
     const double center[3] = {0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])};
     const double t_start = wall();
     for (int r = 0; r < 1000; ++r) {
-      double tb = wall();
+      double tb = wall(), cb = cpu();
       if (periodic)    // the exact periodic sum: Ewald with libm erfc (O(N^2) real space)
         kifmm::periodic_direct_sum(kifmm::KernelSpec{}, center, 0.5 * (hi[0] - lo[0]), sq.size(),
                                    sx.data(), sq.data(), g.maxtag, g.x.data(), nullptr,
@@ -632,6 +647,7 @@ int cmd_run(const Args &a)
         kifmm::direct_sum(kifmm::KernelSpec{}, sq.size(), sx.data(), sq.data(), g.maxtag,
                           g.x.data(), nullptr, grad.data());
       t_eval.push_back(wall() - tb);
+      c_eval.push_back(cpu() - cb);
       if ((int) t_eval.size() >= min_repeats && wall() - t_start >= min_time) break;
       if (wall() - t_start > 30 * min_time && (int) t_eval.size() >= 1) break;
     }
@@ -695,7 +711,8 @@ int cmd_run(const Args &a)
          "\"t_eval\": %.6e, \"t_eval_min\": %.6e, \"t_pair\": %.6e, \"t_kspace\": %.6e, "
          "\"repeats\": %zu, \"t_setup\": %.6e, \"mem_mb\": %.3f, \"rss_base_mb\": %.3f, "
          "\"hwm_reset\": %s, \"omp_threads\": %d, \"load\": [%.2f, %.2f], "
-         "\"spacing\": %.6e%s}\n",
+         "\"spacing\": %.6e, \"c_eval\": %.6e, \"c_eval_min\": %.6e, \"c_pair\": %.6e, "
+         "\"c_kspace\": %.6e, \"c_setup\": %.6e%s}\n",
          sp.name.c_str(), get(a, "solver").c_str(), (long long) lmp->atom->natoms, ns,
          finite ? err : -1.0, fmax_err, std::sqrt(den / std::max<size_t>(ns, 1)),
          nclumps > 0 ? fmtd(cden > 0 ? std::sqrt(cnum / cden) : std::sqrt(cnum)).c_str() : "null",
@@ -703,7 +720,9 @@ int cmd_run(const Args &a)
          t_pair.empty() ? 0.0 : median(t_pair), t_kspace.empty() ? 0.0 : median(t_kspace),
          t_eval.size(), t_setup, std::max(0L, hwm - rss0) / 1024.0, rss0 / 1024.0,
          hwm_reset ? "true" : "false", omp_get_max_threads(), load0, load1, spacing,
-         extra.c_str());
+         median(c_eval), *std::min_element(c_eval.begin(), c_eval.end()),
+         c_pair.empty() ? 0.0 : median(c_pair), c_kspace.empty() ? 0.0 : median(c_kspace),
+         c_setup, extra.c_str());
   fflush(stdout);
   delete lmp;
   return finite ? 0 : 3;

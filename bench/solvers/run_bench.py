@@ -22,6 +22,7 @@ ROOT = os.path.abspath(os.path.join(HERE, "..", ".."))
 
 
 EXACT_SOLVERS = ("direct", "coulcut")
+COMPETITORS = ("msm", "ewald", "pppm")
 
 
 def log(msg):
@@ -288,15 +289,18 @@ def main():
                 record(rec)
                 log(f"{tag}: reference on {res['sampled']} of {res['natoms']} atoms, "
                     f"{rec['wall']:.1f} s")
-            # msm at large N: only the specs that were on msm's Pareto front at the previous N
-            keep_msm = None
-            if prev_n is not None and isinstance(n, int) and n >= lim["prune_msm_from_n"]:
-                prev = [r for (k, c, nn, s), r in done.items()
-                        if k == "run" and c == name and nn == prev_n and r.get("solver") == "msm"
-                        and r.get("status") == "ok"]
-                if prev:
-                    front = pareto([(r["t_eval"], r["error"]) for r in prev])
-                    keep_msm = {r["spec"] for r in prev if (r["t_eval"], r["error"]) in front}
+            # competitors (msm, ewald, pppm) at large N: only the settings that were on that
+            # solver's Pareto front (CPU time, error) at the previous N of the case
+            keep = {}
+            if prev_n is not None and isinstance(n, int) and n >= lim["prune_competitors_from_n"]:
+                for comp in COMPETITORS:
+                    prev = [r for (k, c, nn, s), r in done.items()
+                            if k == "run" and c == name and nn == prev_n
+                            and r.get("solver") == comp and r.get("status") == "ok"]
+                    if prev:
+                        pts = [(r.get("c_eval", r["t_eval"]), r["error"]) for r in prev]
+                        front = pareto(pts)
+                        keep[comp] = {r["spec"] for r, p in zip(prev, pts) if p in front}
             prev_n = n
             for spec in specs:
                 solver = spec.split(":")[0]
@@ -309,7 +313,7 @@ def main():
                     continue
                 if solver == "msm" and periodic:
                     continue
-                if solver == "msm" and keep_msm is not None and spec not in keep_msm:
+                if solver in keep and spec not in keep[solver]:
                     continue
                 key = ("run", name, n, spec)
                 if key in done:
@@ -328,6 +332,7 @@ def main():
                         expo = 2.0 if solver in EXACT_SOLVERS else (
                             1.5 if solver == "ewald" else 1.0)
                         cost = (r["t_setup"] + 2 * r["t_eval"]) * (natoms / r["natoms"]) ** expo
+                        cost *= 2.0    # wall time under the load of the shared cores
                         if cost > lim["timeout_s"]:
                             why = (f"predicted {cost:.0f} s from N = {r['n']} "
                                    f"(limit {lim['timeout_s']} s)")

@@ -11,7 +11,8 @@
 //       S atoms (whole clumps with --clump K); periodic (p p p, cubic box): "engine" =
 //       kifmm::periodic_direct_sum (Ewald sum with libm erfc, double accuracy; sampling as
 //       above), or ACC = LAMMPS kspace ewald at accuracy ACC with pair coul/long (whose erfc
-//       polynomial limits it to ~1e-7; kept to compare with)
+//       polynomial limits it to ~1e-7; kept to compare with); prints the wall and CPU time of
+//       the direct sum on the targets (time_direct_sum, c_direct_sum)
 //   bench_solvers run --data FILE.data --ref FILE.ref --solver SPEC [--repeats R]
 //                     [--min-time T] [--clump K] [--atom-style STYLE] [--periodic]
 //       one solver: setup (`run 0`), then R timed force evaluations (pair->compute +
@@ -397,7 +398,7 @@ int cmd_ref(const Args &a)
   LAMMPS *lmp = open_lammps(get(a, "screen", "none"));
   load(lmp, a, periodic);
   Reference ref;
-  double t0 = wall(), t_exact = 0;
+  double t0 = wall(), t_exact = 0, c_exact = 0;
   size_t nsample = 0;
   const std::string pref = periodic ? get(a, "periodic") : "";
   if (periodic && pref != "engine") {
@@ -441,7 +442,7 @@ int cmd_ref(const Args &a)
     std::vector<double> tx, grad(3 * targets.size());
     for (int t : targets) tx.insert(tx.end(), {g.x[3 * t], g.x[3 * t + 1], g.x[3 * t + 2]});
     kifmm::KernelSpec k;
-    const double te = wall();
+    const double te = wall(), ce = cpu();
     if (periodic) {
       const double *lo = lmp->domain->boxlo, *hi = lmp->domain->boxhi;
       const double L = hi[0] - lo[0];
@@ -456,6 +457,7 @@ int cmd_ref(const Args &a)
                         grad.data());
     }
     t_exact = wall() - te;
+    c_exact = cpu() - ce;
     const double qqrd2e = lmp->force->qqr2e / lmp->force->dielectric;
     for (size_t k2 = 0; k2 < targets.size(); ++k2)
       for (int d = 0; d < 3; ++d)
@@ -473,8 +475,8 @@ int cmd_ref(const Args &a)
   ref.f_rms = cnt ? std::sqrt(s2 / cnt) : 0.0;
   write_reference(get(a, "out"), ref);
   printf("RESULT {\"natoms\": %lld, \"sampled\": %zu, \"f_rms\": %.6g, \"time\": %.4g, "
-         "\"time_direct_sum\": %.4g, \"omp_threads\": %d}\n",
-         (long long) lmp->atom->natoms, nsample, ref.f_rms, wall() - t0, t_exact,
+         "\"time_direct_sum\": %.4g, \"c_direct_sum\": %.6g, \"omp_threads\": %d}\n",
+         (long long) lmp->atom->natoms, nsample, ref.f_rms, wall() - t0, t_exact, c_exact,
          omp_get_max_threads());
   delete lmp;
   return 0;

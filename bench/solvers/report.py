@@ -26,6 +26,9 @@ LABELS = {"kifmm": "kifmm", "msm": "msm (pair coul/msm + kspace msm)",
           "ewald": "ewald", "pppm": "pppm"}
 
 
+SKIPPED_WALL = []    # (case, n, spec) of runs without CPU times (left out: see load)
+
+
 def load(path):
     recs = {}
     if not os.path.exists(path):
@@ -46,10 +49,16 @@ def load(path):
                 r["clump_error"] = None
             # cost = CPU time of the process per evaluation (c_*) where measured: insensitive to
             # the other processes on the shared cores; the wall times stay as t_wall_*
+            # the same for the setup (c_setup). A run with wall times only (an older binary)
+            # is left out: its times must not enter a ratio with CPU times
             if "c_eval" in r:
-                for k in ("eval", "pair", "kspace"):
-                    r[f"t_wall_{k}"] = r.get(f"t_{k}")
-                    r[f"t_{k}"] = r[f"c_{k}"]
+                for k in ("eval", "pair", "kspace", "setup"):
+                    if f"c_{k}" in r:
+                        r[f"t_wall_{k}"] = r.get(f"t_{k}")
+                        r[f"t_{k}"] = r[f"c_{k}"]
+            elif r.get("kind") == "run" and r.get("status") == "ok":
+                SKIPPED_WALL.append((r.get("case"), r.get("n"), r.get("spec")))
+                continue
             recs[(r.get("kind"), r.get("case"), r.get("n"), r.get("spec"))] = r    # latest wins
     return list(recs.values())
 
@@ -116,13 +125,18 @@ def time_at(runs, target, key="error"):
 
 
 def direct_time(recs, case, n):
-    """Time of the exact direct sum at N: measured, or extrapolated as N^2 from the largest
-    measured N of the case."""
+    """Time of the exact direct sum at N: measured; or, above the N where it runs on all atoms,
+    the CPU time of the sampled reference's direct sum (all sources, the sampled targets)
+    scaled by N / sampled (flag "s"); or extrapolated as N^2 from the largest measured N of
+    the case (flag "~")."""
     runs = ok_runs(recs, case, n, "direct")
     if runs:
         return min(r["t_eval"] for r in runs), ""
     if is_periodic(recs, case):    # the exact Ewald sum was only run at small N
         return None, None
+    ref = ref_of(recs, case, n)
+    if ref and ref.get("c_direct_sum") and 0 < ref.get("sampled", 0) < ref["natoms"]:
+        return ref["c_direct_sum"] * ref["natoms"] / ref["sampled"], "s"
     meas = [r for r in ok_runs(recs, case, None, "direct")]
     if not meas:
         return None, None
@@ -199,6 +213,8 @@ def ratio(a, b):
 def fmt_ratio(x, flag=""):
     if x is None:
         return "n/r"
+    if flag == "s":
+        return (f"{x:.3g}x" if x < 100 else f"{x:.0f}x") + " (s)"
     return f"{flag}{x:.3g}x" if x < 100 else f"{flag}{x:.0f}x"
 
 
@@ -287,14 +303,19 @@ def make_plots(recs, outdir, cases, profile):
                     if xs and (solver == "kifmm" or e != TARGETS[-1] or len(xs) > 1):
                         ax.plot(xs, ys, style, marker=mk, color=COLORS[solver], ms=4,
                                 label=f"{solver} @ {e:.0e}")
-            xs, ys, xe, ye = [], [], [], []
+            xs, ys, xe, ye, xsm, ysm = [], [], [], [], [], []
             for n in ns:
                 t, flag = direct_time(recs, case, n)
                 if t is not None and n in natoms:
-                    (xe if flag == "~" else xs).append(natoms[n])
-                    (ye if flag == "~" else ys).append(t)
+                    xl, yl = (xe, ye) if flag == "~" else ((xsm, ysm) if flag == "s" else (xs, ys))
+                    xl.append(natoms[n])
+                    yl.append(t)
             if xs:
                 ax.plot(xs, ys, "-", marker="d", color=COLORS["direct"], ms=4, label="direct")
+            if xsm:
+                ax.plot(xs[-1:] + xsm, ys[-1:] + ysm, "--", marker="d", mfc="none",
+                        color=COLORS["direct"], ms=5,
+                        label="direct (sampled targets, scaled by N/sample)")
             if xe:
                 ax.plot(xs[-1:] + xe, ys[-1:] + ye, ":", marker="d", mfc="none",
                         color=COLORS["direct"], ms=4, label="direct (N^2 extrapolated)")
@@ -407,8 +428,10 @@ def ratio_table(recs, cases):
                     if not any(r["status"] == "ok" for r in tried):
                         row += " failed |"
                         continue
-                    # a ratio with a bound or an extrapolated time is marked approximate
-                    flag = "~" if (fc in ("<=", "~") or fk == "<=") else ""
+                    # a ratio with a bound or an extrapolated time is marked approximate; a
+                    # direct-sum time scaled from the sampled reference is marked s
+                    flag = "~" if (fc in ("<=", "~") or fk == "<=") else (
+                        "s" if fc == "s" else "")
                     row += f" {fmt_ratio(ratio(tc, tk), flag) if tc else 'n/r'} |"
             lines.append(row)
     return "\n".join(lines) + "\n"
@@ -418,7 +441,7 @@ def runs_table(recs, case):
     ns = ns_of(recs, case)
     clumped = any(r.get("clump_error") is not None for r in ok_runs(recs, case))
     hdr = "| solver | N | error |" + (" clump net-force error |" if clumped else "") + \
-        " eval, CPU [s] | pair / kspace, CPU [s] | setup, wall [s] | memory [MB] | runs | status |"
+        " eval, CPU [s] | pair / kspace, CPU [s] | setup, CPU [s] | memory [MB] | runs | status |"
     sep = "|---|---|---|" + ("---|" if clumped else "") + "---|---|---|---|---|---|"
     lines = [hdr, sep]
     for n in ns:
@@ -475,12 +498,16 @@ def summary(recs, cases):
             for c in comps:
                 if c in failed:
                     continue
+                if not any(r.get("kind") == "run" and r["case"] == case and r["n"] == n
+                           and r.get("solver") == c for r in recs):
+                    items.append(f"{c} not run at this N yet")
+                    continue
                 tc, fc = time_at(ok_runs(recs, case, n, c), e)
                 items.append(fmt_ratio(ratio(tc, tk), "~" if "<=" in (fk, fc) else "") +
                              f" vs {c}" if tc is not None else f"{c} n/r")
             if td is not None:
-                items.append(fmt_ratio(ratio(td, tk), "~" if (fd == "~" or fk == "<=") else "")
-                             + " vs direct")
+                items.append(fmt_ratio(ratio(td, tk), "~" if (fd == "~" or fk == "<=") else
+                                       ("s" if fd == "s" else "")) + " vs direct")
             parts.append(f"{e:.0e}: " + ", ".join(items))
         ref = ref_of(recs, case, n)
         samp = " (sampled reference)" if ref and ref["sampled"] < ref["natoms"] else ""
@@ -569,8 +596,12 @@ def setup_table(recs):
     for r in rs:
         cold = "cache=none" in r["spec"]
         by.setdefault(r["order"], {})["cold" if cold else "warm"] = r
+    cpu = all("c_setup" in r and "c_eval" in r for r in rs)
     lines = [f"Uniform cube of {rs[0]['natoms']} atoms; setup = first `run 0` (includes one "
-             "evaluation with energy), CPU time; overhead = setup - eval.\n",
+             "evaluation with energy); overhead = setup - eval. " +
+             ("CPU times." if cpu else "**Wall times** (this table was measured before the "
+              "switch to CPU time, under the load of the shared cores; it is not used in any "
+              "ratio).") + "\n",
              "| order P | eval [s] | setup, no cache [s] | overhead, no cache [s] | "
              "setup, operators from the disk cache [s] | overhead, cached [s] | operators [MB] |",
              "|---|---|---|---|---|---|---|"]
@@ -637,6 +668,74 @@ def clump_ratio_table(recs, cases):
     return "\n".join(lines) + "\n"
 
 
+def matched(recs, case, n, comp, e):
+    """(kifmm time, competitor time, approximate flag) at error e, or None."""
+    tk, fk = time_at(ok_runs(recs, case, n, "kifmm"), e)
+    if comp == "direct":
+        tc, fc = direct_time(recs, case, n)
+    else:
+        tc, fc = time_at(ok_runs(recs, case, n, comp), e)
+    if tk is None or tc is None:
+        return None
+    return tk, tc, (fk == "<=" or fc in ("<=", "~"))
+
+
+def losses(recs, cases):
+    """Where kifmm is slower than another solver at matched error (ratio < 1)."""
+    lines = []
+    for case in cases:
+        comps = [c for c in COMPETITORS if any(r.get("kind") == "run" and r["case"] == case
+                                               and r.get("solver") == c for r in recs)]
+        comps.append("direct")
+        for n in ns_of(recs, case):
+            runs = ok_runs(recs, case, n)
+            if not runs:
+                continue
+            items = []
+            for c in comps:
+                es = []
+                for e in TARGETS:
+                    m = matched(recs, case, n, c, e)
+                    if m and m[1] < m[0]:
+                        es.append(f"{e:.0e} ({'~' if m[2] else ''}{m[0] / m[1]:.3g}x faster: "
+                                  f"{fmt_t(m[1])} s vs kifmm {fmt_t(m[0])} s)")
+                if es:
+                    items.append(f"{'the direct sum' if c == 'direct' else c} at " +
+                                 ", ".join(es))
+            if items:
+                lines.append(f"* {case}{' (periodic)' if is_periodic(recs, case) else ''}, "
+                             f"N = {nlabel(n, runs[0]['natoms'])}: " + "; ".join(items) + ".")
+    return ("\n".join(lines) + "\n") if lines else "(none in these results)\n"
+
+
+def remaining(cfg_path, profile, recs):
+    """What the profile asks for that the results do not have (yet)."""
+    try:
+        with open(cfg_path) as f:
+            cfg = json.load(f)
+        cases = cfg["profiles"][profile]["cases"]
+    except (OSError, KeyError, json.JSONDecodeError):
+        return []
+    out = []
+    for c in cases:
+        if not c.get("enabled", True):
+            continue
+        name = c["name"]
+        ns = c.get("n") or ["start", "end"]
+        periodic = c.get("periodic", False) or name == "scene_platelets"
+        fams = ["ewald", "pppm"] if periodic else ["msm"]
+        for n in ns:
+            tried = [r for r in recs if r.get("kind") == "run" and r.get("case") == name
+                     and r.get("n") == n]
+            if not any(r["solver"] == "kifmm" and r["status"] == "ok" for r in tried):
+                out.append(f"`{name}` N = {n}: not measured (CPU-time campaign)")
+                continue
+            miss = [f for f in fams if not any(r["solver"] == f for r in tried)]
+            if miss:
+                out.append(f"`{name}` N = {n}: no {' / '.join(miss)} runs yet")
+    return out
+
+
 def pending_list(cfg_path, profile):
     try:
         with open(cfg_path) as f:
@@ -673,6 +772,12 @@ def write_doc(recs, doc, plots, profile, cases_path):
       "extrapolation, see below; `msm n/r`: no run of that solver reached that error). Full "
       "tables: [speed ratio at matched error](#speed-ratio-at-matched-error).\n")
     w(summary(recs, cases_of(recs)))
+    w("\n## Where kifmm is slower\n")
+    w("Every case, N and matched error where another solver needs less CPU time than kifmm "
+      "for the same measured error (`~`: one time is a bound or an extrapolation). At N ~ 1e3 "
+      "kifmm's octree is a single leaf at most orders, i.e. kifmm is a direct sum with "
+      "the overhead of the style.\n")
+    w(losses(recs, cases_of(recs)))
     w("## What is measured\n")
     w("""All solvers see the same atoms (one LAMMPS data file per configuration and N, `units lj`,
 unit charges, dielectric 1, `boundary f f f`) and are compared with the same exact
@@ -695,9 +800,12 @@ reference, in one invocation of the driver (`bench/solvers/run_bench.py` calling
   other work (load average below), which inflates wall times by factors up to ~5 depending
   on the moment, while CPU times stay comparable between runs made minutes or hours apart.
   The wall times (MPI_Wtime) are in results.jsonl as `t_eval` (`c_eval` is the CPU time).
-  `pair / kspace` splits the CPU time.
-* **setup**: wall time (it includes reading files) of the first `run 0 post no` (init, neighbor lists, grid or operator
-  setup and the first evaluation including energy). kifmm reads its translation operators
+  `pair / kspace` splits the CPU time. A first campaign that recorded wall times only is
+  kept in bench/solvers/results/wall-clock-v1.jsonl; **none of its times is used in this
+  report** (no ratio mixes wall-clock and CPU times).
+* **setup**: CPU time (the wall time is in results.jsonl as `t_setup`) of the first
+  `run 0 post no` (init, neighbor lists, grid or operator setup and the first evaluation
+  including energy). kifmm reads its translation operators
   from a warm disk cache (filled by the `setup` step of the campaign); the cold precompute
   per order is in the operator setup table.
 * **memory**: peak resident memory of the solver: `/proc/self/status` VmHWM after the
@@ -714,6 +822,13 @@ reference, in one invocation of the driver (`bench/solvers/run_bench.py` calling
   comparison is against msm's best setting for each error, not against one guess.
 * direct: `kifmm::direct_sum` (vectorized O(N^2), the same code as the reference) on all
   atoms, up to N = 120000; LAMMPS pair coul/cut (O(N^2) neighbor list) up to N = 12000.
+  Above N = 120000 (the 1e6 runs) the direct sum is **timed on the sample** of the reference
+  (all N sources, the 4000 sampled targets, CPU time) and scaled by N / 4000 (exact for a
+  sum whose cost is N targets x N sources): marked `(s)`.
+* Competitors at N >= 5e4 (msm, ewald, pppm) run only the settings that were on that
+  solver's Pareto front at the previous N of the case; a setting whose predicted time (from
+  the previous N as N, N^1.5 for ewald, N^2 for direct sums) exceeds the per-run limit
+  (600 s) is recorded as skipped, not run.
 * **periodic cases** (`boundary p p p`, the unit cube as the cell, same configurations):
   kifmm (periodic mode of the style) against LAMMPS `ewald` and `pppm` with
   `pair_style coul/long C*s` (`pair_modify table 0`, accuracy A*F_rms as for msm; pppm
@@ -811,6 +926,14 @@ cases `direct` is the exact Ewald sum, run at N <= 5000 only.
     w("\n### Exact references\n")
     w(reference_table(recs, main_cases + hard_cases))
     w("\n## Pending\n")
+    rem = remaining(cases_path, profile, recs)
+    if rem:
+        w("Asked for by profile `" + profile + "` of cases.json and not in these results "
+          "(`bash bench/solvers/run.sh` resumes the campaign and runs exactly these):\n")
+        w("".join(f"* {x}\n" for x in rem))
+    if SKIPPED_WALL:
+        w(f"* {len(SKIPPED_WALL)} runs in the results file have wall times only (an older "
+          "binary): left out of this report.\n")
     pend = pending_list(cases_path, profile)
     w("""* **Full-size scene snapshots**: the scene cases use the quick variants of the examples
   (1000 to 6000 atoms); the full-size scenes (10^4 to 10^5 atoms, 10^5 steps) take hours

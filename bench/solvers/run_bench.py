@@ -61,9 +61,23 @@ def rss_mb(pid):
     return 0.0
 
 
+def cpu_s(pid):
+    """CPU time (user + system, all threads) of a running process, from /proc."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError):
+        return 0.0
+
+
+WALL_FACTOR = 4.0    # a child is also stopped at this many times the limit in wall time
+
+
 def run_child(cmd, env, timeout, mem_limit_mb, screen):
     """Runs cmd; returns (status, result dict or None, message). Kills the child (and only it)
-    when it exceeds the time or memory limit."""
+    when it exceeds the memory limit or the time limit: `timeout` seconds of CPU time (the
+    measure of this campaign: the cores are shared), or WALL_FACTOR times that in wall time."""
     t0 = time.time()
     with open(screen + ".stdout", "w") as out, open(screen + ".stderr", "w") as err:
         p = subprocess.Popen(cmd, stdout=out, stderr=err, env=env)
@@ -72,7 +86,7 @@ def run_child(cmd, env, timeout, mem_limit_mb, screen):
         while p.poll() is None:
             time.sleep(0.2)
             peak = max(peak, rss_mb(p.pid))
-            if time.time() - t0 > timeout:
+            if cpu_s(p.pid) > timeout or time.time() - t0 > WALL_FACTOR * timeout:
                 status = "timeout"
             elif peak > mem_limit_mb:
                 status = "memory"
@@ -86,7 +100,8 @@ def run_child(cmd, env, timeout, mem_limit_mb, screen):
             if line.startswith("RESULT "):
                 result = json.loads(line[7:])
     if status:
-        msg = (f"killed after {time.time() - t0:.0f} s (limit {timeout} s)" if status == "timeout"
+        msg = (f"killed after {time.time() - t0:.0f} s wall (limit {timeout} s CPU, "
+               f"{WALL_FACTOR * timeout:.0f} s wall)" if status == "timeout"
                else f"killed at {peak:.0f} MB RSS (limit {mem_limit_mb} MB)")
         return status, result, msg
     if p.returncode != 0 or result is None:
@@ -323,26 +338,31 @@ def main():
                 if solver in keep and spec not in keep[solver]:
                     continue
                 key = ("run", name, n, spec)
-                if key in done:
-                    continue
-                # a setting that failed at a smaller N, or whose time at the previous N scaled
-                # as N would exceed the time limit, is not run again (recorded as skipped)
+                if key in done and done[key].get("status") != "skipped":
+                    continue    # (a skipped setting is judged again: the rule may change)
+                # a setting that failed at a smaller N, or whose CPU time at the previous N
+                # where it ran, scaled with N, would exceed the time limit, is not run again
+                # (recorded as skipped)
                 smaller = [r for (k, c, nn, s), r in done.items()
                            if k == "run" and c == name and s == spec and isinstance(n, int)
-                           and isinstance(nn, int) and nn < n]
+                           and isinstance(nn, int) and nn < n and r.get("status") != "skipped"]
                 why = ""
                 for r in smaller:
                     if r.get("status") not in ("ok", None):
                         why = f"{r['status']} at N = {r['n']}"
-                    elif r.get("status") == "ok" and r.get("natoms"):
-                        # cost ~ N (kifmm, msm, pppm), N^1.5 (ewald), N^2 (direct sums)
-                        expo = 2.0 if solver in EXACT_SOLVERS else (
-                            1.5 if solver == "ewald" else 1.0)
-                        cost = (r["t_setup"] + 2 * r["t_eval"]) * (natoms / r["natoms"]) ** expo
-                        cost *= 2.0    # wall time under the load of the shared cores
-                        if cost > lim["timeout_s"]:
-                            why = (f"predicted {cost:.0f} s from N = {r['n']} "
-                                   f"(limit {lim['timeout_s']} s)")
+                ran = [r for r in smaller if r.get("status") == "ok" and r.get("natoms")]
+                if not why and ran:
+                    r = max(ran, key=lambda x: x["natoms"])
+                    # cost ~ N (kifmm, msm, pppm), N^1.5 (ewald), N^2 (direct sums); kifmm's
+                    # operator setup (setup minus its evaluation) does not grow with N
+                    expo = 2.0 if solver in EXACT_SOLVERS else (1.5 if solver == "ewald" else 1.0)
+                    scale = (natoms / r["natoms"]) ** expo
+                    ev = r.get("c_eval", r["t_eval"])
+                    over = max(0.0, r.get("c_setup", r["t_setup"]) - ev)
+                    cost = (over if solver == "kifmm" else over * scale) + 3 * ev * scale
+                    if cost > lim["timeout_s"]:
+                        why = (f"predicted {cost:.0f} s CPU from N = {r['n']} "
+                               f"(limit {lim['timeout_s']} s)")
                 if why:
                     record({"kind": "run", "case": name, "n": n, "spec": spec, "solver": solver,
                             "status": "skipped", "message": why, "clump": clump,

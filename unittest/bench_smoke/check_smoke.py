@@ -74,6 +74,14 @@ def main(out):
     # dipole clumps: clump net-force errors were measured
     with open(os.path.join(out, "results.jsonl")) as f:
         recs = [json.loads(ln) for ln in f if ln.strip()]
+    # the report uses CPU times only: every run measured them (else it would be left out)
+    for r in recs:
+        if r.get("kind") == "run" and r.get("status") == "ok":
+            for k in ("c_eval",) + (("c_setup",) if r.get("solver") != "direct" else ()):
+                if not (r.get(k, -1) > 0 and math.isfinite(r[k])):
+                    fail(f"{r['case']} {r['spec']}: no CPU time {k} ({r.get(k)})")
+    if "binary): left out of this report" in text:
+        fail("the report left runs out for lack of CPU times")
     dip = [r for r in recs if r.get("case") == "dipole3" and r.get("solver") == "kifmm"]
     if not dip or any(r.get("clump_error") is None or not math.isfinite(r["clump_error"])
                       for r in dip):

@@ -8,6 +8,8 @@
 // depend on the number of threads.
 #pragma once
 
+#include "communicator.h"
+#include "distributed.h"
 #include "interaction_lists.h"
 #include "kernel_scaling.h"
 #include "kifmm.h"
@@ -44,6 +46,8 @@ template <class K> class FmmEvaluator : public Evaluator {
 
   void evaluate(std::size_t n_src, const double *src_xyz, const double *src_q, std::size_t n_trg,
                 const double *trg_xyz, double *pot, double *grad) override;
+  void evaluate_distributed(Communicator &comm, std::size_t n, const double *xyz, const double *q, double *pot,
+                            double *grad) override;
   const Stats &stats() const override { return stats_; }
   const KernelSpec &kernel() const override { return spec_; }
   const Options &options() const override { return opt_; }
@@ -80,9 +84,11 @@ template <class K> class FmmEvaluator : public Evaluator {
     box_surface(unit, ctr, tree_.half_width(tree_.cells[c].level), out);
   }
   // X list of a small target leaf: direct P2P (cost n_src*n_trg) beats P2L (n_src*nsurf)
-  bool x_direct(int b) const { return tree_.cells[b].leaf() && (int) tree_.cells[b].n_trg() <= nsurf_; }
+  bool x_direct(int b) const { return tree_.cells[b].leaf() && (int) tree_.cells[b].gtrg <= nsurf_; }
   void setup_operators(double &t_setup);
-  void upward(bool);
+  // P2M/M2M for levels l_hi down to l_lo (m2m_only: non-leaf cells only)
+  void upward(int l_hi, int l_lo, bool m2m_only);
+  void sorted_copies(std::size_t ns, const double *sxyz, const double *sq, std::size_t nt, const double *txyz);
   void m2l();
   void p2l();
   void downward();
@@ -125,16 +131,16 @@ template <class K> void FmmEvaluator<K>::setup_operators(double &t_setup)
 // Cells of a level are processed in chunks of kBatch; within a chunk, operators act on many
 // vectors at once (GEMM): P2M pseudo-inverse on all leaf check potentials, M2M grouped by
 // child octant. Each chunk writes only its own cells.
-template <class K> void FmmEvaluator<K>::upward(bool)
+template <class K> void FmmEvaluator<K>::upward(int l_hi, int l_lo, bool m2m_only)
 {
   const auto &cells = tree_.cells;
   constexpr int kBatch = 64;
-  for (int l = tree_.depth; l >= first_level(); --l) {
+  for (int l = std::min(l_hi, tree_.depth); l >= std::max(l_lo, first_level()); --l) {
     const OperatorSet &op = *ops_[l];
     const double inv_s = 1.0 / scale_[l];
     std::vector<int> list;
     for (int c = tree_.level_begin[l]; c < tree_.level_begin[l + 1]; ++c)
-      if (cells[c].n_src() > 0) list.push_back(c);
+      if (cells[c].gsrc > 0 && !(m2m_only && cells[c].leaf())) list.push_back(c);
     const int n = (int) list.size(), nchunks = (n + kBatch - 1) / kBatch;
 #pragma omp parallel if (nchunks > 1)
     {
@@ -165,7 +171,7 @@ template <class K> void FmmEvaluator<K>::upward(bool)
             sel.clear();
             for (std::size_t j = 0; j < nl.size(); ++j) {
               const int c = cells[nl[j]].child[oct];
-              if (c >= 0 && cells[c].n_src() > 0) sel.push_back((int) j);
+              if (c >= 0 && cells[c].gsrc > 0) sel.push_back((int) j);
             }
             if (sel.empty()) continue;
             xb.resize((std::size_t) nsurf_ * sel.size());
@@ -185,6 +191,35 @@ template <class K> void FmmEvaluator<K>::upward(bool)
         }
       }
     }
+  }
+}
+
+// sorted structure-of-arrays copies of the points (tree_.src_order / trg_order)
+template <class K>
+void FmmEvaluator<K>::sorted_copies(std::size_t ns, const double *sxyz, const double *sq, std::size_t n_trg,
+                                    const double *trg_xyz)
+{
+  sx_.resize(ns);
+  sy_.resize(ns);
+  sz_.resize(ns);
+  sq_.resize(ns);
+  tx_.resize(n_trg);
+  ty_.resize(n_trg);
+  tz_.resize(n_trg);
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < ns; ++i) {
+    const std::size_t j = tree_.src_order[i];
+    sx_[i] = sxyz[3 * j];
+    sy_[i] = sxyz[3 * j + 1];
+    sz_[i] = sxyz[3 * j + 2];
+    sq_[i] = sq[j];
+  }
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < n_trg; ++i) {
+    const std::size_t j = tree_.trg_order[i];
+    tx_[i] = trg_xyz[3 * j];
+    ty_[i] = trg_xyz[3 * j + 1];
+    tz_[i] = trg_xyz[3 * j + 2];
   }
 }
 
@@ -394,7 +429,7 @@ template <class K> void FmmEvaluator<K>::leaf_pass(bool want_pot, bool want_grad
       const std::size_t t0i = B.trg_begin;
       for (const int *a = lists_.W.begin(b); a != lists_.W.end(b); ++a) {
         const Cell &A = cells[*a];
-        if ((int) A.n_src() <= nsurf_) {    // direct is cheaper than M2P (subtree sources are contiguous)
+        if ((int) A.gsrc <= nsurf_) {    // direct is cheaper than M2P (subtree sources are contiguous)
           const std::size_t s0 = A.src_begin;
           p2p_pg<K, false>(k_, want_pot, B.n_trg(), &tx_[t0i], &ty_[t0i], &tz_[t0i], A.n_src(), &sx_[s0], &sy_[s0],
                            &sz_[s0], &sq_[s0], &tp_[t0i], &tgx_[t0i], &tgy_[t0i], &tgz_[t0i]);
@@ -490,29 +525,7 @@ void FmmEvaluator<K>::evaluate(std::size_t n_src, const double *src_xyz, const d
     if (!level_independent_operators<K>()) root.half_width = std::exp2(std::ceil(std::log2(root.half_width)));
   }
   build_octree(tree_, root, ns, sxyz, n_trg, trg_xyz, opt_.leaf_size, opt_.max_depth);
-  // sorted structure-of-arrays copies
-  sx_.resize(ns);
-  sy_.resize(ns);
-  sz_.resize(ns);
-  sq_.resize(ns);
-  tx_.resize(n_trg);
-  ty_.resize(n_trg);
-  tz_.resize(n_trg);
-#pragma omp parallel for schedule(static)
-  for (std::size_t i = 0; i < ns; ++i) {
-    const std::size_t j = tree_.src_order[i];
-    sx_[i] = sxyz[3 * j];
-    sy_[i] = sxyz[3 * j + 1];
-    sz_[i] = sxyz[3 * j + 2];
-    sq_[i] = sq[j];
-  }
-#pragma omp parallel for schedule(static)
-  for (std::size_t i = 0; i < n_trg; ++i) {
-    const std::size_t j = tree_.trg_order[i];
-    tx_[i] = trg_xyz[3 * j];
-    ty_[i] = trg_xyz[3 * j + 1];
-    tz_[i] = trg_xyz[3 * j + 2];
-  }
+  sorted_copies(ns, sxyz, sq, n_trg, trg_xyz);
   double t1 = omp_get_wtime();
   stats_.t_tree = t1 - t;
   if (opt_.periodic) build_periodic_interaction_lists(tree_, lists_, plists_);
@@ -537,7 +550,7 @@ void FmmEvaluator<K>::evaluate(std::size_t n_src, const double *src_xyz, const d
   tgx_.assign(n_trg, 0.0);
   tgy_.assign(n_trg, 0.0);
   tgz_.assign(n_trg, 0.0);
-  upward(true);
+  upward(tree_.depth, first_level(), false);
   double t4 = omp_get_wtime();
   stats_.t_upward = t4 - t3;
   m2l();
@@ -572,4 +585,5 @@ void FmmEvaluator<K>::evaluate(std::size_t n_src, const double *src_xyz, const d
 
 }    // namespace kifmm
 
-#include "periodic_core.h"    // periodic passes (member templates)
+#include "periodic_core.h"       // periodic passes (member templates)
+#include "distributed_core.h"    // distributed evaluation (member template)

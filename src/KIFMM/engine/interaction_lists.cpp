@@ -51,7 +51,7 @@ void build_interaction_lists(const Octree &tree, InteractionLists &lists)
           const int dx = D.ix - B.ix, dy = D.iy - B.iy, dz = D.iz - B.iz;
           if (dx >= -1 && dx <= 1 && dy >= -1 && dy <= 1 && dz >= -1 && dz <= 1)
             col[(dx + 1) * 9 + (dy + 1) * 3 + (dz + 1)] = d;
-          else if (D.n_src() > 0 && B.n_trg() > 0)
+          else if (D.gsrc > 0 && B.n_trg() > 0)
             V[b].push_back(d);    // child of a parent's colleague, not adjacent
         }
       }
@@ -64,7 +64,7 @@ void build_interaction_lists(const Octree &tree, InteractionLists &lists)
       for (int s = 0; s < 27; ++s) {
         const int pc = lists.colleagues[p][s];
         if (s == 13 || pc < 0) continue;
-        if (cells[pc].leaf() && cells[pc].n_src() > 0) consider(pc);
+        if (cells[pc].leaf() && cells[pc].gsrc > 0) consider(pc);
       }
     }
   }
@@ -80,7 +80,7 @@ void build_interaction_lists(const Octree &tree, InteractionLists &lists)
     std::vector<int> stack;
     for (int s = 0; s < 27; ++s) {
       const int c = lists.colleagues[b][s];
-      if (c < 0 || cells[c].n_src() == 0) continue;
+      if (c < 0 || cells[c].gsrc == 0) continue;
       if (cells[c].leaf()) u.push_back(c);
       else stack.push_back(c);
     }
@@ -91,7 +91,7 @@ void build_interaction_lists(const Octree &tree, InteractionLists &lists)
       for (int k = 0; k < C.n_children; ++k) {
         const int d = C.first_child + k;
         const Cell &D = cells[d];
-        if (D.n_src() == 0) continue;
+        if (D.gsrc == 0) continue;
         if (!cells_adjacent(D, B)) W[b].push_back(d);
         else if (D.leaf()) u.push_back(d);
         else stack.push_back(d);

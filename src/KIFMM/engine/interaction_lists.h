@@ -4,7 +4,8 @@
 //   W(B)  (B leaf)  descendants A of B's colleagues, A not adjacent to B but
 //                   parent(A) adjacent to B                                   -> M2P (or P2P)
 //   X(B)            leaves A coarser than B, adjacent to parent(B), not adjacent to B -> P2L
-// Only cells holding sources enter a list, and only cells holding targets get lists, so a
+// Only cells holding sources (Cell::gsrc) enter a list, and only cells holding targets here
+// (n_trg() > 0) get lists, so a
 // target leaf receives every source exactly once through U, W of itself and V, X of itself
 // and its ancestors (tested symbolically in unittest/engine/test_tree.cpp).
 // Colleagues: the (up to) 27 same-level cells touching B, by offset slot

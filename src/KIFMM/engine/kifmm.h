@@ -15,6 +15,8 @@
 
 namespace kifmm {
 
+class Communicator;    // communicator.h (MPI implementation: mpi_communicator.h)
+
 enum class KernelType { Laplace, Yukawa };
 
 struct KernelSpec {
@@ -36,6 +38,9 @@ struct Options {
   // into it. Laplace: tin-foil Ewald sum (k = 0 omitted) with a uniform neutralizing background
   // for a net charge; Yukawa: the lattice sum. Needs fixed_root (see set_root, periodic.h).
   bool periodic = false;
+  // Distributed evaluation: level of the global top tree (0 = from the number of ranks,
+  // see distributed.h).
+  int top_level = 0;
 };
 
 // Timings in seconds and sizes of the last evaluate() call.
@@ -49,6 +54,11 @@ struct Stats {
   double t_precompute = 0;            // operator setup in this call (0 when cached)
   std::size_t operator_bytes = 0;     // memory of precomputed operators
   std::size_t tree_bytes = 0;         // memory of tree + expansions in this evaluation
+  // distributed evaluation (evaluate_distributed): time in communication calls, bytes this
+  // rank sent (of which ghost points), ghost points received, level of the top tree
+  double t_comm = 0;
+  std::size_t comm_bytes = 0, ghost_bytes = 0, n_ghosts = 0;
+  int top_level = 0;
 };
 
 class Evaluator {
@@ -61,6 +71,14 @@ class Evaluator {
   virtual void evaluate(std::size_t n_src, const double *src_xyz, const double *src_q,
                         std::size_t n_trg, const double *trg_xyz, double *pot,
                         double *grad) = 0;
+
+  // Distributed N-body evaluation (collective over comm): every rank passes its own points
+  // (all are targets; those with q != 0 are sources) and gets pot/grad of its own points,
+  // equal to evaluate() on the union of all ranks' points up to round-off. Memory per rank:
+  // its points, ghost points near them, and a top tree that does not grow with N.
+  // Open boundaries only (throws std::invalid_argument with periodic options).
+  virtual void evaluate_distributed(Communicator &comm, std::size_t n, const double *xyz, const double *q,
+                                    double *pot, double *grad) = 0;
 
   virtual const Stats &stats() const = 0;
   virtual const KernelSpec &kernel() const = 0;

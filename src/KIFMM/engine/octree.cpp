@@ -37,8 +37,13 @@ RootBox bounding_cube(std::size_t n_src, const double *src_xyz, std::size_t n_tr
   };
   scan(n_src, src_xyz);
   scan(n_trg, trg_xyz);
+  if (n_src + n_trg == 0) return RootBox();
+  return bounding_cube_of(lo, hi);
+}
+
+RootBox bounding_cube_of(const double lo[3], const double hi[3])
+{
   RootBox box;
-  if (n_src + n_trg == 0) return box;
   double w = 0;
   for (int d = 0; d < 3; ++d) {
     box.center[d] = 0.5 * (lo[d] + hi[d]);
@@ -50,6 +55,71 @@ RootBox bounding_cube(std::size_t n_src, const double *src_xyz, std::size_t n_tr
   w = w * (1.0 + 1e-8) + 1e-12 * scale;
   box.half_width = w > 0 ? w : 1.0;
   return box;
+}
+
+void build_top_tree(TopTree &top, int top_level, const uint64_t *src_count, const uint64_t *trg_count,
+                    int leaf_size, int max_depth)
+{
+  leaf_size = std::max(leaf_size, 1);
+  max_depth = std::min(std::max(max_depth, 0), kMortonBits);
+  top.top_level = top_level;
+  top.cells.clear();
+  top.level_begin.assign(1, 0);
+  top.open.clear();
+  const std::size_t n = std::size_t(1) << (3 * top_level);
+  std::vector<uint64_t> ps(n + 1, 0), pt(n + 1, 0);    // prefix sums
+  for (std::size_t i = 0; i < n; ++i) {
+    ps[i + 1] = ps[i] + src_count[i];
+    pt[i + 1] = pt[i] + trg_count[i];
+  }
+  auto counts = [&](int level, uint64_t prefix, uint64_t &s, uint64_t &t) {
+    const int sh = 3 * (top_level - level);
+    const std::size_t b = (std::size_t) (prefix << sh), e = (std::size_t) ((prefix + 1) << sh);
+    s = ps[e] - ps[b];
+    t = pt[e] - pt[b];
+  };
+  Cell rc;
+  uint64_t s, t;
+  counts(0, 0, s, t);
+  rc.gsrc = (uint32_t) s;
+  rc.gtrg = (uint32_t) t;
+  top.cells.push_back(rc);
+  for (int level = 0;; ++level) {
+    const int begin = top.level_begin[level], end = (int) top.cells.size();
+    for (int ci = begin; ci < end; ++ci) {
+      const Cell c = top.cells[ci];
+      const bool split = level < max_depth && ((int) c.gsrc > leaf_size || (int) c.gtrg > leaf_size);
+      if (level == top_level) {
+        top.open.push_back(split);
+        continue;
+      }
+      top.open.push_back(0);
+      if (!split) continue;
+      const int first = (int) top.cells.size();
+      int nch = 0;
+      for (int oct = 0; oct < 8; ++oct) {
+        const uint64_t pre = (c.prefix << 3) | (uint64_t) oct;
+        counts(level + 1, pre, s, t);
+        if (s + t == 0) continue;
+        Cell ch;
+        ch.level = level + 1;
+        ch.parent = ci;
+        ch.prefix = pre;
+        ch.ix = 2 * c.ix + (oct & 1);
+        ch.iy = 2 * c.iy + ((oct >> 1) & 1);
+        ch.iz = 2 * c.iz + ((oct >> 2) & 1);
+        ch.gsrc = (uint32_t) s;
+        ch.gtrg = (uint32_t) t;
+        top.cells[ci].child[oct] = (int) top.cells.size();
+        top.cells.push_back(ch);
+        ++nch;
+      }
+      top.cells[ci].first_child = first;
+      top.cells[ci].n_children = nch;
+    }
+    top.level_begin.push_back(end);
+    if ((int) top.cells.size() == end) break;
+  }
 }
 
 void morton_keys(const RootBox &root, std::size_t n, const double *xyz, std::vector<uint64_t> &keys)
@@ -159,7 +229,7 @@ void partition_octants(uint64_t *keys, uint32_t *idx, uint32_t b, uint32_t e, in
 // cells of one level run in parallel (disjoint ranges), children are appended in cell order.
 // Points end up ordered by leaf in Morton order (input order inside a leaf).
 void build_octree(Octree &tree, const RootBox &root, std::size_t n_src, const double *src_xyz,
-                  std::size_t n_trg, const double *trg_xyz, int leaf_size, int max_depth)
+                  std::size_t n_trg, const double *trg_xyz, int leaf_size, int max_depth, const TopTree *top)
 {
   tree.root = root;
   tree.cells.clear();
@@ -180,6 +250,12 @@ void build_octree(Octree &tree, const RootBox &root, std::size_t n_src, const do
   Cell rc;
   rc.src_end = (uint32_t) n_src;
   rc.trg_end = (uint32_t) n_trg;
+  rc.gsrc = (uint32_t) n_src;
+  rc.gtrg = (uint32_t) n_trg;
+  if (top) {
+    rc.gsrc = top->cells[0].gsrc;
+    rc.gtrg = top->cells[0].gtrg;
+  }
   tree.cells.push_back(rc);
   tree.level_begin.push_back(0);
   std::vector<uint32_t> counts;    // per cell of the level: 8 source + 8 target octant sizes
@@ -190,9 +266,16 @@ void build_octree(Octree &tree, const RootBox &root, std::size_t n_src, const do
     counts.assign((std::size_t) n * 16, 0);
     split.assign(n, 0);
     std::size_t work = 0;
+    const bool forced = top && level < top->top_level;    // copy of the global top tree
     for (int ci = begin; ci < end; ++ci) {
-      const Cell &c = tree.cells[ci];
-      split[ci - begin] = level < max_depth && ((int) c.n_src() > leaf_size || (int) c.n_trg() > leaf_size);
+      Cell &c = tree.cells[ci];
+      if (forced) split[ci - begin] = top->cells[ci].n_children > 0;
+      else if (top && level == top->top_level) {
+        const bool open = top->open[ci] != 0, here = c.n_src() + c.n_trg() > 0;
+        split[ci - begin] = open && here;
+        c.pruned = open && !here;
+      } else
+        split[ci - begin] = level < max_depth && ((int) c.n_src() > leaf_size || (int) c.n_trg() > leaf_size);
       if (split[ci - begin]) work += c.n_src() + c.n_trg();
     }
     const int shift = 3 * (kMortonBits - level - 1);
@@ -213,7 +296,7 @@ void build_octree(Octree &tree, const RootBox &root, std::size_t n_src, const do
     }
     for (int ci = begin; ci < end; ++ci) {
       if (!split[ci - begin]) {
-        tree.leaves.push_back(ci);
+        if (!tree.cells[ci].pruned) tree.leaves.push_back(ci);
         continue;
       }
       const Cell c = tree.cells[ci];
@@ -223,7 +306,8 @@ void build_octree(Octree &tree, const RootBox &root, std::size_t n_src, const do
       int nch = 0;
       for (int oct = 0; oct < 8; ++oct) {
         const uint32_t se = sp + cnt[oct], te = tp + cnt[8 + oct];
-        if (se > sp || te > tp) {
+        const int top_child = forced ? top->cells[ci].child[oct] : -1;
+        if (forced ? top_child >= 0 : (se > sp || te > tp)) {
           Cell ch;
           ch.level = level + 1;
           ch.parent = ci;
@@ -235,6 +319,13 @@ void build_octree(Octree &tree, const RootBox &root, std::size_t n_src, const do
           ch.src_end = se;
           ch.trg_begin = tp;
           ch.trg_end = te;
+          ch.gsrc = se - sp;
+          ch.gtrg = te - tp;
+          if (top && level + 1 <= top->top_level) {    // a top cell: same index as in `top`
+            const Cell &g = top->cells[tree.cells.size()];
+            ch.gsrc = g.gsrc;
+            ch.gtrg = g.gtrg;
+          }
           tree.cells[ci].child[oct] = (int) tree.cells.size();
           tree.cells.push_back(ch);
           ++nch;

@@ -30,7 +30,12 @@ struct Cell {
   int ix = 0, iy = 0, iz = 0;                         // integer anchor at this level
   uint32_t src_begin = 0, src_end = 0;                // range in sorted sources
   uint32_t trg_begin = 0, trg_end = 0;                // range in sorted targets
-  bool leaf() const { return n_children == 0; }
+  // Counts of the whole (global) tree, which decide list membership and direct-vs-expansion
+  // choices. Serial trees: equal to n_src(), n_trg(). Distributed trees (see TopTree): the
+  // reduced counts for top cells; the local ranges then hold only this rank's part.
+  uint32_t gsrc = 0, gtrg = 0;
+  bool pruned = false;    // split in the global tree, children not held here (distributed)
+  bool leaf() const { return n_children == 0 && !pruned; }
   uint32_t n_src() const { return src_end - src_begin; }
   uint32_t n_trg() const { return trg_end - trg_begin; }
 };
@@ -49,13 +54,35 @@ struct Octree {
   std::size_t bytes() const;
 };
 
+// Global top of a distributed tree: levels 0..top_level, made from the source and target
+// counts of all 8^top_level cells (summed over ranks) by the serial split rule, cells in the
+// order build_octree makes them (level by level, children by octant). open[i]: a cell of
+// top_level that splits further in the global tree.
+struct TopTree {
+  int top_level = 0;
+  std::vector<Cell> cells;    // structure + gsrc/gtrg; point ranges unused
+  std::vector<int> level_begin;
+  std::vector<char> open;
+};
+
+// counts indexed by the Morton prefix at top_level (8^top_level entries each)
+void build_top_tree(TopTree &top, int top_level, const uint64_t *src_count, const uint64_t *trg_count,
+                    int leaf_size, int max_depth);
+
 // Bounding cube of the points (slightly enlarged so every point is strictly inside).
 RootBox bounding_cube(std::size_t n_src, const double *src_xyz, std::size_t n_trg,
                       const double *trg_xyz);
 
+// Bounding cube from the coordinate bounds (lo/hi over all points; same result as above).
+RootBox bounding_cube_of(const double lo[3], const double hi[3]);
+
 // Build the tree. Points outside a given root box are clamped into its boundary cells.
+// With `top` (distributed): levels below top->top_level copy the global top tree (all its
+// cells, empty here or not, its split decisions and counts); a cell of top_level that is open
+// splits by the usual rule if it holds points here, else it is marked pruned.
 void build_octree(Octree &tree, const RootBox &root, std::size_t n_src, const double *src_xyz,
-                  std::size_t n_trg, const double *trg_xyz, int leaf_size, int max_depth);
+                  std::size_t n_trg, const double *trg_xyz, int leaf_size, int max_depth,
+                  const TopTree *top = nullptr);
 
 // Morton keys (full depth) of points in a root box, and a stable LSD radix sort of them (a full
 // sort, e.g. for partitioning by key ranges; the tree build itself partitions top down).

@@ -1,0 +1,42 @@
+// Distributed evaluation, the part that does not depend on the kernel: global root and top
+// tree from reductions, frontier cells, who holds what, and the import of ghost points
+// (doc/design.md, "MPI: distributed evaluation"). Used by FmmEvaluator::evaluate_distributed.
+#pragma once
+
+#include "communicator.h"
+#include "octree.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace kifmm {
+
+struct DistributedData {
+  RootBox root;
+  TopTree top;
+  uint64_t global_points = 0, global_sources = 0;
+  std::vector<double> xyz, q;        // this rank's points (first n_own, input order), then ghosts
+  std::size_t n_own = 0;
+  std::vector<int> frontier;         // top cells without children in the top tree
+  std::vector<char> responsible;     // per frontier cell: this rank computes its density
+  std::size_t ghost_bytes = 0;       // bytes of ghost points this rank sent
+  double t_comm = 0;                 // time inside communication calls
+};
+
+// Level of the top tree for P ranks: the smallest L >= 2 with 8^L >= 8P, at most 5.
+int default_top_level(int nranks);
+
+// Collective. n points of this rank (xyz interleaved, strengths q; every point is a target,
+// the ones with q != 0 are sources). top_level 0 = default_top_level. pow2_root rounds the
+// root half-width up to a power of two (kernels with level-dependent operators), fixed_root
+// replaces the bounding cube. nsurf: equivalent surface size (W-list direct threshold).
+void distributed_setup(Communicator &comm, int top_level, int leaf_size, int max_depth, int nsurf, bool pow2_root,
+                       const RootBox *fixed_root, std::size_t n, const double *xyz, const double *q,
+                       DistributedData &out);
+
+// Keep only the targets with input index < n_keep in the sorted target order (ranges remapped;
+// gtrg keeps the counts the tree was split with).
+void keep_targets(Octree &tree, std::size_t n_keep);
+
+}    // namespace kifmm

@@ -1,0 +1,133 @@
+// FmmEvaluator<K>::evaluate_distributed (included at the end of fmm_core.h). The setup that
+// does not depend on the kernel (root, top tree, ghost import) is distributed.h/.cpp; here:
+// the local tree over own + ghost points with the global top copied in, the exchange of the
+// frontier densities, the top M2M, and the usual passes for this rank's targets.
+#pragma once
+
+#include <stdexcept>
+
+namespace kifmm {
+
+template <class K>
+void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, const double *xyz, const double *q,
+                                           double *pot, double *grad)
+{
+  if (opt_.periodic) throw std::invalid_argument("kifmm: evaluate_distributed supports open boundaries only");
+  stats_ = Stats{};
+  stats_.n_targets = n;
+  if (pot) std::fill(pot, pot + n, 0.0);
+  if (grad) std::fill(grad, grad + 3 * n, 0.0);
+  comm.reset_counters();
+  const double t = omp_get_wtime();
+  RootBox fixed;
+  if (opt_.fixed_root) {
+    for (int d = 0; d < 3; ++d) fixed.center[d] = opt_.root_center[d];
+    fixed.half_width = opt_.root_half_width;
+  }
+  DistributedData dd;
+  distributed_setup(comm, opt_.top_level, opt_.leaf_size, opt_.max_depth, nsurf_, !level_independent_operators<K>(),
+                    opt_.fixed_root ? &fixed : nullptr, n, xyz, q, dd);
+  stats_.t_comm = dd.t_comm;
+  stats_.ghost_bytes = dd.ghost_bytes;
+  stats_.top_level = dd.top.top_level;
+  stats_.n_sources = dd.global_sources;
+  auto finish = [&] { stats_.comm_bytes = comm.bytes_sent(); };
+  if (dd.global_sources == 0) {
+    finish();
+    return;
+  }
+  const std::size_t nl = dd.q.size();
+  stats_.n_ghosts = nl - n;
+  // local sources: points of nonzero strength; local targets: all points (the ghosts count
+  // for the split rule, then keep_targets drops them)
+  std::vector<double> kxyz, kq;
+  const double *sxyz = dd.xyz.data(), *sq = dd.q.data();
+  std::size_t ns = nl;
+  std::size_t nz = 0;
+  for (std::size_t j = 0; j < nl; ++j) nz += dd.q[j] == 0.0;
+  if (nz > 0) {
+    kxyz.reserve(3 * (nl - nz));
+    kq.reserve(nl - nz);
+    for (std::size_t j = 0; j < nl; ++j)
+      if (dd.q[j] != 0.0) {
+        kxyz.insert(kxyz.end(), &dd.xyz[3 * j], &dd.xyz[3 * j] + 3);
+        kq.push_back(dd.q[j]);
+      }
+    sxyz = kxyz.data();
+    sq = kq.data();
+    ns = kq.size();
+  }
+  build_octree(tree_, dd.root, ns, sxyz, nl, dd.xyz.data(), opt_.leaf_size, opt_.max_depth, &dd.top);
+  keep_targets(tree_, n);
+  sorted_copies(ns, sxyz, sq, n, xyz);
+  const double t1 = omp_get_wtime();
+  stats_.t_tree = t1 - t - dd.t_comm;
+  build_interaction_lists(tree_, lists_);
+  const double t2 = omp_get_wtime();
+  stats_.t_lists = t2 - t1;
+  stats_.depth = tree_.depth;
+  stats_.n_cells = tree_.cells.size();
+  stats_.n_leaves = tree_.leaves.size();
+  double t_setup = 0;
+  setup_operators(t_setup);
+  stats_.t_precompute = t_setup;
+  const double t3 = omp_get_wtime();
+
+  const std::size_t nc = tree_.cells.size();
+  up_equiv_.assign(nc * nsurf_, 0.0);
+  dn_check_.assign(nc * nsurf_, 0.0);
+  dn_equiv_.assign(nc * nsurf_, 0.0);
+  has_local_.assign(nc, 0);
+  tp_.assign(n, 0.0);
+  tgx_.assign(n, 0.0);
+  tgy_.assign(n, 0.0);
+  tgz_.assign(n, 0.0);
+  upward(tree_.depth, first_level(), false);
+  // densities of the frontier cells: from the responsible rank (which holds the whole cell),
+  // one sum over ranks; then M2M over the top levels on every rank
+  std::vector<int> slots;
+  for (std::size_t f = 0; f < dd.frontier.size(); ++f)
+    if (tree_.cells[dd.frontier[f]].level >= first_level() && tree_.cells[dd.frontier[f]].gsrc > 0)
+      slots.push_back((int) f);
+  std::vector<double> buf(slots.size() * (std::size_t) nsurf_, 0.0);
+  for (std::size_t k = 0; k < slots.size(); ++k)
+    if (dd.responsible[slots[k]]) std::copy(up(dd.frontier[slots[k]]), up(dd.frontier[slots[k]]) + nsurf_, &buf[k * nsurf_]);
+  const double tc = omp_get_wtime();
+  comm.allreduce_sum(buf.data(), buf.size());
+  const double t_reduce = omp_get_wtime() - tc;
+  stats_.t_comm += t_reduce;
+  for (std::size_t k = 0; k < slots.size(); ++k)
+    std::copy(&buf[k * nsurf_], &buf[(k + 1) * nsurf_], up(dd.frontier[slots[k]]));
+  upward(dd.top.top_level - 1, first_level(), true);
+  const double t4 = omp_get_wtime();
+  stats_.t_upward = t4 - t3 - t_reduce;
+  m2l();
+  const double t5 = omp_get_wtime();
+  stats_.t_m2l = t5 - t4;
+  p2l();
+  const double t6 = omp_get_wtime();
+  stats_.t_wx = t6 - t5;
+  downward();
+  stats_.t_downward = omp_get_wtime() - t6;
+  leaf_pass(pot != nullptr, grad != nullptr);
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t j = tree_.trg_order[i];
+    if (pot) pot[j] = tp_[i];
+    if (grad) {
+      grad[3 * j] = tgx_[i];
+      grad[3 * j + 1] = tgy_[i];
+      grad[3 * j + 2] = tgz_[i];
+    }
+  }
+  // a point of nonzero strength meets itself once (not a coincident pair)
+  std::size_t self = 0;
+  for (std::size_t i = 0; i < n; ++i) self += q[i] != 0.0;
+  if (stats_.coincident_pairs >= self) stats_.coincident_pairs -= self;
+  stats_.tree_bytes = tree_.bytes() + lists_.bytes() +
+      sizeof(double) * (up_equiv_.size() + dn_check_.size() + dn_equiv_.size() + xhat_.capacity() + yhat_.capacity() +
+                        sx_.size() * 4 + tx_.size() * 7 + dd.xyz.capacity() + dd.q.capacity());
+  finish();
+}
+
+}    // namespace kifmm

@@ -1,0 +1,223 @@
+// Distributed evaluation (Evaluator::evaluate_distributed over MPI) equals the serial
+// evaluation of all points to 1e-10 relative, for uniform, clustered and dipole sets, several
+// partitions (slabs with an empty rank, spatial blocks, random, everything on one rank) and top
+// tree levels. Run under mpirun -np 1..4 (ctest label mpi); on one rank it checks the serial
+// communicator path.
+#include "fmm_core.h"
+#include "kernels.h"
+#include "kifmm.h"
+#include "mpi_communicator.h"
+#include "test_util.h"
+
+#include <gtest/gtest.h>
+#include <mpi.h>
+
+#include <algorithm>
+#include <functional>
+#include <random>
+
+using namespace kifmm_test;
+
+namespace {
+
+int rank_of_world() { int r; MPI_Comm_rank(MPI_COMM_WORLD, &r); return r; }
+int size_of_world() { int s; MPI_Comm_size(MPI_COMM_WORLD, &s); return s; }
+
+// owner rank of every point
+using Partition = std::function<std::vector<int>(const Points &, int)>;
+
+std::vector<int> slabs_last_empty(const Points &p, int nranks)
+{
+  // slabs in x over the first nranks-1 ranks (the last rank holds nothing)
+  const int m = std::max(1, nranks - 1);
+  double lo = 1e300, hi = -1e300;
+  for (std::size_t j = 0; j < p.size(); ++j) {
+    lo = std::min(lo, p.xyz[3 * j]);
+    hi = std::max(hi, p.xyz[3 * j]);
+  }
+  std::vector<int> o(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const int r = (int) ((p.xyz[3 * i] - lo) / (hi - lo + 1e-300) * m);
+    o[i] = std::min(std::max(r, 0), m - 1);
+  }
+  return o;
+}
+
+std::vector<int> blocks(const Points &p, int nranks)
+{
+  // 2x2x1 blocks around the mean, folded onto the ranks
+  double c[3] = {0, 0, 0};
+  for (std::size_t j = 0; j < p.size(); ++j)
+    for (int d = 0; d < 3; ++d) c[d] += p.xyz[3 * j + d] / p.size();
+  std::vector<int> o(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i) o[i] = ((p.xyz[3 * i] > c[0]) + 2 * (p.xyz[3 * i + 1] > c[1])) % nranks;
+  return o;
+}
+
+std::vector<int> random_owner(const Points &p, int nranks)
+{
+  std::vector<int> o(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i) o[i] = (int) ((i * 2654435761u) % 7919) % nranks;
+  return o;
+}
+
+std::vector<int> all_on_last(const Points &p, int nranks) { return std::vector<int>(p.size(), nranks - 1); }
+
+struct Result {
+  double grad = 0, pot = 0;    // max abs difference / max abs serial value, over all ranks
+  std::size_t ghosts = 0, own = 0, comm_bytes = 0;
+};
+
+template <class K>
+Result compare(const K &k, const kifmm::KernelSpec &spec, const Points &all, const Partition &part, int top_level,
+               int leaf = 24, int order = 6)
+{
+  const int me = rank_of_world(), np = size_of_world();
+  kifmm::Options o;
+  o.order = order;
+  o.leaf_size = leaf;
+  o.top_level = top_level;
+  kifmm::FmmEvaluator<K> serial(k, spec, o), dist(k, spec, o);
+  const std::size_t n = all.size();
+  std::vector<double> ps(n), gs(3 * n);
+  serial.evaluate(n, all.xyz.data(), all.q.data(), n, all.xyz.data(), ps.data(), gs.data());
+  Points mine;
+  std::vector<std::size_t> idx;
+  const std::vector<int> owner = part(all, np);
+  for (std::size_t i = 0; i < n; ++i)
+    if (owner[i] == me) {
+      idx.push_back(i);
+      mine.xyz.insert(mine.xyz.end(), &all.xyz[3 * i], &all.xyz[3 * i] + 3);
+      mine.q.push_back(all.q[i]);
+    }
+  std::vector<double> pd(idx.size()), gd(3 * idx.size());
+  kifmm::MpiCommunicator comm(MPI_COMM_WORLD);
+  dist.evaluate_distributed(comm, idx.size(), mine.xyz.data(), mine.q.data(), pd.data(), gd.data());
+  double gmax = 0, pmax = 0, gerr = 0, perr = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    pmax = std::max(pmax, std::fabs(ps[i]));
+    for (int d = 0; d < 3; ++d) gmax = std::max(gmax, std::fabs(gs[3 * i + d]));
+  }
+  for (std::size_t k2 = 0; k2 < idx.size(); ++k2) {
+    const std::size_t i = idx[k2];
+    perr = std::max(perr, std::fabs(pd[k2] - ps[i]));
+    for (int d = 0; d < 3; ++d) gerr = std::max(gerr, std::fabs(gd[3 * k2 + d] - gs[3 * i + d]));
+  }
+  double e[2] = {gerr / gmax, perr / pmax};
+  MPI_Allreduce(MPI_IN_PLACE, e, 2, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  unsigned long long c[3] = {dist.stats().n_ghosts, idx.size(), dist.stats().comm_bytes};
+  MPI_Allreduce(MPI_IN_PLACE, c, 3, MPI_UNSIGNED_LONG_LONG, MPI_MAX, MPI_COMM_WORLD);
+  Result r;
+  r.grad = e[0];
+  r.pot = e[1];
+  r.ghosts = c[0];
+  r.own = c[1];
+  r.comm_bytes = c[2];
+  return r;
+}
+
+Points with_zero_charges(Points p)
+{
+  for (std::size_t i = 0; i < p.size(); i += 7) p.q[i] = 0.0;
+  return p;
+}
+
+const Partition kPartitions[] = {slabs_last_empty, blocks, random_owner, all_on_last};
+const char *kPartitionNames[] = {"slabs (last rank empty)", "blocks", "random", "all on the last rank"};
+
+void check_all_partitions(const Points &p, int top_level, int leaf = 24)
+{
+  kifmm::LaplaceKernel k;
+  kifmm::KernelSpec spec;
+  for (int j = 0; j < 4; ++j) {
+    Result r = compare(k, spec, p, kPartitions[j], top_level, leaf);
+    EXPECT_LE(r.grad, 1e-10) << kPartitionNames[j] << ", top level " << top_level;
+    EXPECT_LE(r.pot, 1e-10) << kPartitionNames[j] << ", top level " << top_level;
+  }
+}
+
+}    // namespace
+
+TEST(Distributed, UniformEqualsSerial)
+{
+  Points p = with_zero_charges(uniform_cube(3000, 11));
+  for (int top : {2, 3, 4}) check_all_partitions(p, top);
+}
+
+TEST(Distributed, PlummerEqualsSerial)
+{
+  Points p = plummer(3000, 12);
+  for (int top : {2, 3}) check_all_partitions(p, top);
+}
+
+TEST(Distributed, TwoClustersEqualsSerial)
+{
+  Points p = two_clusters(2000, 13);
+  Points u = uniform_cube(300, 14, 6.0);    // a sparse halo: coarse top leaves next to dense cells
+  p.xyz.insert(p.xyz.end(), u.xyz.begin(), u.xyz.end());
+  p.q.insert(p.q.end(), u.q.begin(), u.q.end());
+  for (int top : {2, 3, 4}) check_all_partitions(p, top);
+}
+
+TEST(Distributed, DipolesEqualsSerial)
+{
+  Points p = dipoles(1200, 15);
+  for (int top : {2, 3}) check_all_partitions(p, top);
+}
+
+TEST(Distributed, FewPointsAndDefaultTopLevel)
+{
+  // fewer points than a leaf (the root is a leaf), and a handful (top leaves at levels 0..2)
+  for (std::size_t n : {5, 40, 200}) check_all_partitions(uniform_cube(n, 16), 0);
+}
+
+TEST(Distributed, YukawaEqualsSerial)
+{
+  kifmm::KernelSpec spec;
+  spec.type = kifmm::KernelType::Yukawa;
+  spec.kappa = 2.0;
+  kifmm::YukawaKernel k{2.0};
+  Points p = two_clusters(1500, 17);
+  Points u = uniform_cube(1500, 18, 5.0);
+  p.xyz.insert(p.xyz.end(), u.xyz.begin(), u.xyz.end());
+  p.q.insert(p.q.end(), u.q.begin(), u.q.end());
+  for (int j = 0; j < 4; ++j) {
+    Result r = compare(k, spec, p, kPartitions[j], 3);
+    EXPECT_LE(r.grad, 1e-10) << kPartitionNames[j];
+    EXPECT_LE(r.pot, 1e-10) << kPartitionNames[j];
+  }
+}
+
+// No all-gather: with spatial slabs, a rank receives only the points of the frontier cells near
+// its slab, not the other ranks' points.
+TEST(Distributed, GhostsAreLocal)
+{
+  const int np = size_of_world();
+  if (np < 3) GTEST_SKIP() << "needs 3 or more ranks";
+  kifmm::LaplaceKernel k;
+  kifmm::KernelSpec spec;
+  Points p = uniform_cube(8000, 19);
+  Result r = compare(k, spec, p, slabs_last_empty, 4, 32);
+  EXPECT_LE(r.grad, 1e-10);
+  const double others = 8000.0 - 8000.0 / (np - 1);
+  EXPECT_LT((double) r.ghosts, 0.75 * others) << "ghosts " << r.ghosts << " of " << others;
+  if (rank_of_world() == 0)
+    printf("  max over ranks: own points %zu, ghost points %zu (others' points %.0f), bytes sent %zu\n", r.own,
+           r.ghosts, others, r.comm_bytes);
+  EXPECT_GT(r.comm_bytes, 0u);
+}
+
+int main(int argc, char **argv)
+{
+  MPI_Init(&argc, &argv);
+  ::testing::InitGoogleTest(&argc, argv);
+  if (rank_of_world() != 0) {
+    auto &listeners = ::testing::UnitTest::GetInstance()->listeners();
+    delete listeners.Release(listeners.default_result_printer());
+  }
+  int rc = RUN_ALL_TESTS();
+  int worst = 0;
+  MPI_Allreduce(&rc, &worst, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  MPI_Finalize();
+  return worst;
+}

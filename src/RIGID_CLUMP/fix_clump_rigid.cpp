@@ -3,6 +3,7 @@
 #include "clump_math.h"
 #include "clump_union.h"
 #include "molecule_layout.h"
+#include "rigid_small_layout.h"
 
 #include "atom.h"
 #include "comm.h"
@@ -10,6 +11,7 @@
 #include "domain.h"
 #include "error.h"
 #include "group.h"
+#include "memory.h"
 #include "modify.h"
 #include "neighbor.h"
 #include "update.h"
@@ -32,6 +34,9 @@ using clump::Vec3;
 namespace {
 
 // Columns of the per-clump compute rigid/local "<ID>_local" (documented in the doc page).
+constexpr int restart_version = 1;
+constexpr int restart_size = 5;    // version, density, tol, state stored, clumps
+
 const char *const LOCAL_COLUMNS =
     "id mol mass x y z xu yu zu vx vy vz fx fy fz tqx tqy tqz omegax omegay omegaz "
     "angmomx angmomy angmomz quatw quati quatj quatk inertiax inertiay inertiaz";
@@ -79,6 +84,9 @@ FixClumpRigid::FixClumpRigid(LAMMPS *lmp, int narg, char **arg) : Fix(lmp, narg,
   global_freq = 1;
   extvector = -1;    // the count is not normalized by thermo_modify norm, the energies are
   extlist = new int[4]{0, 1, 1, 1};
+  restart_global = 1;
+  restart_peratom = 1;
+  wd_section = 1;
 
   if (narg < 5)
     error->all(FLERR, "Illegal fix clump/rigid command: expected density <rho> or infile <file>");
@@ -175,8 +183,15 @@ FixClumpRigid::FixClumpRigid(LAMMPS *lmp, int narg, char **arg) : Fix(lmp, narg,
   if (exclude)
     neighbor->modify_params(fmt::format("exclude molecule/intra {}", group->names[igroup]));
 
-  // file through which rigid/small receives the union mass properties of existing clumps
-  if (density > 0.0) {
+  // restored body-frame offsets of the pebbles (restart files), moved with the atoms
+  grow_arrays(atom->nmax);
+  atom->add_callback(Atom::GROW);
+  atom->add_callback(Atom::RESTART);
+  for (int i = 0; i < atom->nlocal; ++i) set_arrays(i);
+
+  // file through which rigid/small receives the mass properties (union or the user's infile),
+  // motion and, after a restart, the stored state of the existing clumps
+  {
     // unique per process and instance (several LAMMPS instances may share a process);
     // only rank 0's name matters: rigid/small reads its infile on rank 0
     static int instances = 0;
@@ -197,6 +212,11 @@ FixClumpRigid::FixClumpRigid(LAMMPS *lmp, int narg, char **arg) : Fix(lmp, narg,
 FixClumpRigid::~FixClumpRigid()
 {
   delete[] extlist;
+  if (atom) {
+    atom->delete_callback(id, Atom::GROW);
+    atom->delete_callback(id, Atom::RESTART);
+  }
+  memory->destroy(rdisp);
   // the computes and the rigid fix are owned by this fix; they may already be gone when
   // LAMMPS is being destroyed or the user deleted them
   if (modify) {
@@ -219,8 +239,7 @@ int FixClumpRigid::setmask()
 void FixClumpRigid::post_constructor()
 {
   std::string cmd = fmt::format("{} {} {} molecule", id_rigid, group->names[igroup], integrator);
-  if (density > 0.0) cmd += " infile " + bodies_file;
-  else cmd += " infile " + user_infile;
+  cmd += " infile " + bodies_file;
   if (!template_id.empty()) cmd += " mol " + template_id;
   cmd += extra_args;
   modify->add_fix(cmd);
@@ -250,8 +269,75 @@ void FixClumpRigid::init()
   Fix *r = rigid_fix();
   int dim;
   // rigid/small has not set up its bodies yet (it does so once, at the first run's setup,
-  // from the infile): give it the clumps as they are now, positions and velocities
-  if (density > 0.0 && r->extract("body", dim) == nullptr) write_bodies_file();
+  // from the infile): give it the clumps as they are now, positions and velocities, or the
+  // state stored in the restart file
+  if (r->extract("body", dim) != nullptr) return;
+  if (restart_has_state) {
+    restart_has_state = false;
+    const bool same = (density > 0.0) ? restart_density == density : restart_density == 0.0;
+    if (!same) {
+      if (comm->me == 0)
+        error->warning(FLERR,
+                       "Fix clump/rigid {}: the restart file holds clumps of {}, the fix now "
+                       "asks for {}: the stored clump state is not used, mass properties are "
+                       "recomputed and the motion refitted",
+                       id,
+                       restart_density > 0.0 ? fmt::format("density {}", restart_density)
+                                             : std::string("an infile"),
+                       density > 0.0 ? fmt::format("density {}", density)
+                                     : std::string("an infile"));
+    } else {
+      // every rank gets every stored clump (a clump's owner may have moved to another rank)
+      int n = (int) rrecords.size(), nprocs = comm->nprocs;
+      std::vector<int> counts(nprocs), displs(nprocs);
+      MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, world);
+      int total = 0;
+      for (int p = 0; p < nprocs; ++p) {
+        displs[p] = total;
+        total += counts[p];
+      }
+      std::vector<double> all(total);
+      MPI_Allgatherv(rrecords.data(), n, MPI_DOUBLE, all.data(), counts.data(), displs.data(),
+                     MPI_DOUBLE, world);
+      restored.clear();
+      for (int k = 0; k + NREC <= total; k += NREC)
+        restored[(tagint) all[k]] = std::vector<double>(all.begin() + k, all.begin() + k + NREC);
+      rrecords.clear();
+      write_restored_bodies_file();
+      restore_pending = true;
+      return;
+    }
+  }
+  if (density > 0.0) write_bodies_file();
+  else copy_user_infile();
+}
+
+/* ----------------------------------------------------------------------
+   infile mode: rigid/small reads a copy of the user's file (so that after a restart it can
+   read the stored state from the same file name instead)
+------------------------------------------------------------------------- */
+
+void FixClumpRigid::copy_user_infile()
+{
+  std::string errmsg;
+  if (comm->me == 0) {
+    std::ifstream in(user_infile, std::ios::binary);
+    if (!in)
+      errmsg = fmt::format("cannot open the infile {}", user_infile);
+    else {
+      std::ofstream out(bodies_file, std::ios::binary);
+      out << in.rdbuf();
+      out.close();
+      if (!out) errmsg = fmt::format("cannot write the clump file {}", bodies_file);
+    }
+  }
+  int len = (int) errmsg.size();
+  MPI_Bcast(&len, 1, MPI_INT, 0, world);
+  if (len > 0) {
+    errmsg.resize(len);
+    MPI_Bcast(&errmsg[0], len, MPI_CHAR, 0, world);
+    error->all(FLERR, "Fix clump/rigid {}: {}", id, errmsg);
+  }
 }
 
 /* ----------------------------------------------------------------------
@@ -568,3 +654,327 @@ void FixClumpRigid::set_molecule(int nlocalprev, tagint tagprev, int imol, doubl
 {
   rigid_fix()->set_molecule(nlocalprev, tagprev, imol, xgeom, vcm, quat);
 }
+
+/* ----------------------------------------------------------------------
+   rigid/small's internals, checked: nullptr (and why) when the layout does not match
+------------------------------------------------------------------------- */
+
+RigidSmallLayout *FixClumpRigid::rigid_layout(std::string &why)
+{
+  Fix *r = rigid_fix();
+  auto *v = reinterpret_cast<RigidSmallLayout *>(r);
+  int dim = 0;
+  void *a2b = r->extract("body", dim);
+  void *mb = r->extract("masstotal", dim);    // owned+ghost body masses, refreshed
+  if (!a2b || !mb) {
+    why = "its bodies are not set up";
+    return nullptr;
+  }
+  bool ok = v->me == comm->me && v->nprocs == comm->nprocs && v->inpfile &&
+      bodies_file == v->inpfile && v->maxmol == maxmol && v->setupflag == 1 &&
+      v->reinitflag == 0 && (void *) v->atom2body == a2b && (void *) v->mass_body == mb &&
+      v->bodysize == (int) (sizeof(RigidSmallLayout::Body) / sizeof(double)) &&
+      v->nlocal_body >= 0 && v->nghost_body >= 0 &&
+      v->nlocal_body + v->nghost_body <= v->nmax_body;
+  if (ok)
+    for (int b = 0; b < v->nlocal_body + v->nghost_body && ok; ++b)
+      ok = v->body[b].ilocal >= 0 && v->body[b].ilocal < atom->nlocal + atom->nghost &&
+          v->body[b].mass == static_cast<double *>(mb)[b];
+  if (!ok) {
+    why = "the FixRigidSmall class of this LAMMPS does not match the layout the package was "
+          "built for";
+    return nullptr;
+  }
+  return v;
+}
+
+/* ----------------------------------------------------------------------
+   rigid/small infile from the stored clump state (the exact state is put back in setup())
+------------------------------------------------------------------------- */
+
+void FixClumpRigid::write_restored_bodies_file()
+{
+  std::string errmsg;
+  if (comm->me == 0) {
+    std::ostringstream out;
+    out.precision(17);
+    out << "# fix clump/rigid " << id << ": clump state from the restart file\n"
+        << "# id mass xcm ycm zcm ixx iyy izz ixy ixz iyz vxcm vycm vzcm lx ly lz ixcm iycm "
+           "izcm\n"
+        << restored.size() << "\n";
+    for (const auto &[mol, r] : restored) {
+      // space-frame inertia P diag(I) P^T, P = (ex ey ez) as columns
+      const double *in = &r[12], *ex = &r[15], *ey = &r[18], *ez = &r[21];
+      double t[3][3];
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b)
+          t[a][b] = ex[a] * in[0] * ex[b] + ey[a] * in[1] * ey[b] + ez[a] * in[2] * ez[b];
+      const auto image = (imageint) r[34];
+      const int xbox = (image & IMGMASK) - IMGMAX;
+      const int ybox = (image >> IMGBITS & IMGMASK) - IMGMAX;
+      const int zbox = (image >> IMG2BITS) - IMGMAX;
+      out << (long) mol << ' ' << r[1] << ' ' << r[2] << ' ' << r[3] << ' ' << r[4] << ' '
+          << t[0][0] << ' ' << t[1][1] << ' ' << t[2][2] << ' ' << t[0][1] << ' ' << t[0][2]
+          << ' ' << t[1][2] << ' ' << r[5] << ' ' << r[6] << ' ' << r[7] << ' ' << r[24] << ' '
+          << r[25] << ' ' << r[26] << ' ' << xbox << ' ' << ybox << ' ' << zbox << '\n';
+    }
+    std::ofstream f(bodies_file);
+    f << out.str();
+    f.close();
+    if (!f) errmsg = fmt::format("cannot write the clump file {}", bodies_file);
+  }
+  int len = (int) errmsg.size();
+  MPI_Bcast(&len, 1, MPI_INT, 0, world);
+  if (len > 0) {
+    errmsg.resize(len);
+    MPI_Bcast(&errmsg[0], len, MPI_CHAR, 0, world);
+    error->all(FLERR, "Fix clump/rigid {}: {}", id, errmsg);
+  }
+}
+
+/* ----------------------------------------------------------------------
+   called before rigid/small's setup() (this fix comes first in the fix list) and after its
+   setup_pre_neighbor(), which has set the clumps up from the infile
+------------------------------------------------------------------------- */
+
+void FixClumpRigid::setup(int)
+{
+  if (restore_pending) {
+    restore_pending = false;
+    restore_state();
+  }
+}
+
+void FixClumpRigid::restore_state()
+{
+  std::string why;
+  RigidSmallLayout *v = rigid_layout(why);
+  int bad = v ? 0 : 1, anybad = 0;
+  MPI_Allreduce(&bad, &anybad, 1, MPI_INT, MPI_MAX, world);
+  if (anybad) {
+    if (comm->me == 0)
+      error->warning(FLERR,
+                     "Fix clump/rigid {}: cannot put the stored clump state back ({}); the run "
+                     "continues from the clump file (equal to the stored state to roundoff)",
+                     id, why.empty() ? "on another rank" : why);
+    restored.clear();
+    return;
+  }
+  int missing = 0, nset = 0;
+  for (int b = 0; b < v->nlocal_body + v->nghost_body; ++b) {
+    RigidSmallLayout::Body &body = v->body[b];
+    auto it = restored.find(atom->molecule[body.ilocal]);
+    if (it == restored.end()) {
+      if (b < v->nlocal_body) ++missing;
+      continue;
+    }
+    const double *r = it->second.data();
+    body.mass = r[1];
+    for (int d = 0; d < 3; ++d) {
+      body.xcm[d] = r[2 + d];
+      body.vcm[d] = r[5 + d];
+      body.inertia[d] = r[12 + d];
+      body.ex_space[d] = r[15 + d];
+      body.ey_space[d] = r[18 + d];
+      body.ez_space[d] = r[21 + d];
+      body.angmom[d] = r[24 + d];
+      body.omega[d] = r[27 + d];
+    }
+    for (int k = 0; k < 4; ++k) {
+      body.quat[k] = r[8 + k];
+      body.conjqm[k] = r[30 + k];
+    }
+    body.image = (imageint) r[34];
+    if (b < v->nlocal_body) ++nset;
+  }
+  for (int i = 0; i < atom->nlocal; ++i) {
+    if (v->atom2body[i] < 0) continue;
+    if (rdisp[i][3] == 0.0) {
+      ++missing;
+      continue;
+    }
+    for (int d = 0; d < 3; ++d) v->displace[i][d] = rdisp[i][d];
+    rdisp[i][3] = 0.0;
+  }
+  int counts[2] = {nset, missing}, all[2];
+  MPI_Allreduce(counts, all, 2, MPI_INT, MPI_SUM, world);
+  restored.clear();
+  if (comm->me == 0) {
+    if (all[1] > 0)
+      error->warning(FLERR,
+                     "Fix clump/rigid {}: {} clumps or pebbles were not in the restart file; "
+                     "they continue from the clump file",
+                     id, all[1]);
+    utils::logmesg(lmp, "fix clump/rigid {}: state of {} clumps restored from the restart file\n",
+                   id, all[0]);
+  }
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixClumpRigid::write_restart(FILE *fp)
+{
+  // the clump state exists once rigid/small has set its bodies up (first run)
+  int dim;
+  int exact = 0;
+  std::string why;
+  if (rigid_fix()->extract("body", dim) != nullptr) {
+    exact = rigid_layout(why) != nullptr ? 1 : 0;
+    int all;
+    MPI_Allreduce(&exact, &all, 1, MPI_INT, MPI_MIN, world);
+    if (!all && comm->me == 0 && !restart_warned) {
+      restart_warned = true;
+      error->warning(FLERR,
+                     "Fix clump/rigid {}: the restart file cannot hold the exact clump state "
+                     "({}); a restarted run recomputes it",
+                     id, why.empty() ? "on another rank" : why);
+    }
+    exact = all;
+  }
+  write_exact = exact != 0;
+  double list[restart_size] = {(double) restart_version, density, tol, (double) exact, 0.0};
+  if (exact) {
+    double n = reinterpret_cast<RigidSmallLayout *>(rigid_fix())->nlocal_body, total = 0.0;
+    MPI_Allreduce(&n, &total, 1, MPI_DOUBLE, MPI_SUM, world);
+    list[4] = total;
+  }
+  if (comm->me == 0) {
+    int size = restart_size * sizeof(double);
+    fwrite(&size, sizeof(int), 1, fp);
+    fwrite(list, sizeof(double), restart_size, fp);
+  }
+}
+
+void FixClumpRigid::restart(char *buf)
+{
+  const auto *list = reinterpret_cast<const double *>(buf);
+  if ((int) list[0] != restart_version)
+    error->all(FLERR, "Fix clump/rigid {}: restart data of version {} (expected {})", id,
+               (int) list[0], restart_version);
+  restart_density = list[1];
+  restart_has_state = list[3] != 0.0;
+}
+
+int FixClumpRigid::size_restart(int i)
+{
+  if (!write_exact || !(atom->mask[i] & groupbit)) return 2;
+  auto *v = reinterpret_cast<RigidSmallLayout *>(rigid_fix());
+  if (v->atom2body[i] < 0) return 2;
+  return v->bodyown[i] >= 0 ? 5 + NREC : 5;
+}
+
+int FixClumpRigid::maxsize_restart()
+{
+  return 5 + NREC;
+}
+
+int FixClumpRigid::pack_restart(int i, double *buf)
+{
+  const int n = size_restart(i);
+  buf[0] = n;    // the count first: other fixes skip over it
+  buf[1] = n == 2 ? 0 : (n == 5 ? 1 : 2);
+  if (n == 2) return n;
+  auto *v = reinterpret_cast<RigidSmallLayout *>(rigid_fix());
+  for (int d = 0; d < 3; ++d) buf[2 + d] = v->displace[i][d];
+  if (n == 5) return n;
+  const RigidSmallLayout::Body &b = v->body[v->bodyown[i]];
+  double *r = buf + 5;
+  r[0] = (double) atom->molecule[i];
+  r[1] = b.mass;
+  for (int d = 0; d < 3; ++d) {
+    r[2 + d] = b.xcm[d];
+    r[5 + d] = b.vcm[d];
+    r[12 + d] = b.inertia[d];
+    r[15 + d] = b.ex_space[d];
+    r[18 + d] = b.ey_space[d];
+    r[21 + d] = b.ez_space[d];
+    r[24 + d] = b.angmom[d];
+    r[27 + d] = b.omega[d];
+  }
+  for (int k = 0; k < 4; ++k) {
+    r[8 + k] = b.quat[k];
+    r[30 + k] = b.conjqm[k];
+  }
+  r[34] = (double) b.image;
+  return n;
+}
+
+void FixClumpRigid::unpack_restart(int nlocal, int nth)
+{
+  double **extra = atom->extra;
+  int m = 0;
+  for (int k = 0; k < nth; ++k) m += static_cast<int>(extra[nlocal][m]);
+  const double *buf = &extra[nlocal][m];
+  const int n = static_cast<int>(buf[0]), status = static_cast<int>(buf[1]);
+  if (!((n == 2 && status == 0) || (n == 5 && status == 1) || (n == 5 + NREC && status == 2)))
+    error->one(FLERR, "Fix clump/rigid {}: per-atom restart data of unexpected size", id);
+  if (status == 0) return;
+  for (int d = 0; d < 3; ++d) rdisp[nlocal][d] = buf[2 + d];
+  rdisp[nlocal][3] = 1.0;
+  if (status == 2) rrecords.insert(rrecords.end(), buf + 5, buf + 5 + NREC);
+}
+
+/* ---------------------------------------------------------------------- */
+
+void FixClumpRigid::grow_arrays(int nmax)
+{
+  memory->grow(rdisp, nmax, 4, "clump/rigid:rdisp");
+}
+
+void FixClumpRigid::copy_arrays(int i, int j, int)
+{
+  for (int k = 0; k < 4; ++k) rdisp[j][k] = rdisp[i][k];
+}
+
+void FixClumpRigid::set_arrays(int i)
+{
+  for (int k = 0; k < 4; ++k) rdisp[i][k] = 0.0;
+}
+
+int FixClumpRigid::pack_exchange(int i, double *buf)
+{
+  for (int k = 0; k < 4; ++k) buf[k] = rdisp[i][k];
+  return 4;
+}
+
+int FixClumpRigid::unpack_exchange(int nlocal, double *buf)
+{
+  for (int k = 0; k < 4; ++k) rdisp[nlocal][k] = buf[k];
+  return 4;
+}
+
+double FixClumpRigid::memory_usage()
+{
+  return (double) atom->nmax * 4 * sizeof(double);
+}
+
+/* ----------------------------------------------------------------------
+   write_data: data files have no place for rigid bodies in this LAMMPS (rigid/small writes
+   none either). The pebbles and their molecule IDs (fix property/atom) are written; this fix
+   adds a comment (read_data skips it) and warns.
+------------------------------------------------------------------------- */
+
+void FixClumpRigid::write_data_section_size(int, int &nx, int &ny)
+{
+  nx = 0;
+  ny = 1;
+}
+
+void FixClumpRigid::write_data_section_pack(int, double **) {}
+
+void FixClumpRigid::write_data_section_keyword(int, FILE *fp)
+{
+  fmt::print(fp,
+             "\n# fix clump/rigid {}: clumps are the molecules of group {}; the clump state "
+             "(mass properties, orientation, motion) is not in this file.\n# After read_data "
+             "define fix clump/rigid again (mass properties are recomputed, the clump motion is "
+             "refitted to the pebble velocities).\n",
+             id, group->names[igroup]);
+  error->warning(FLERR,
+                 "Fix clump/rigid {}: write_data stores the pebbles and their molecule IDs, not "
+                 "the clump state; after read_data define the fix again (mass properties "
+                 "recomputed, motion refitted); write_restart keeps the exact state",
+                 id);
+}
+
+void FixClumpRigid::write_data_section(int, FILE *, int, double **, int) {}

@@ -11,10 +11,15 @@
 //   - outputs: number of clumps, translational and rotational kinetic energy (global
 //     vector), and the per-clump compute rigid/local "<ID>_local" (orientation quaternion,
 //     position, angular momentum, ...) for dump local.
+//   - restart files: the exact state of every clump (mass properties, position, orientation,
+//     motion) and the body-frame offset of every pebble, put back into rigid/small after its
+//     set-up in the restarted run (a run split by a restart equals the unsplit run);
+//     write_data keeps the pebbles and molecule IDs only (a warning says so).
 #pragma once
 
 #include "fix.h"
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -30,6 +35,28 @@ class FixClumpRigid : public Fix {
   double compute_vector(int) override;
   void *extract(const char *, int &) override;
   void set_molecule(int, tagint, int, double *, double *, double *) override;
+  void setup(int) override;
+
+  // restart files: global settings, per-atom body-frame offsets and (on the atom that owns
+  // its clump in rigid/small) the clump state
+  void write_restart(FILE *) override;
+  void restart(char *) override;
+  int pack_restart(int, double *) override;
+  void unpack_restart(int, int) override;
+  int size_restart(int) override;
+  int maxsize_restart() override;
+  void grow_arrays(int) override;
+  void copy_arrays(int, int, int) override;
+  void set_arrays(int) override;
+  int pack_exchange(int, double *) override;
+  int unpack_exchange(int, double *) override;
+  double memory_usage() override;
+
+  // write_data: a comment in the data file and a warning (no clump state in data files)
+  void write_data_section_size(int, int &, int &) override;
+  void write_data_section_pack(int, double **) override;
+  void write_data_section_keyword(int, FILE *) override;
+  void write_data_section(int, FILE *, int, double **, int) override;
 
  private:
   double density = 0.0;     // > 0: union mass properties at this density
@@ -42,11 +69,28 @@ class FixClumpRigid : public Fix {
   tagint maxmol = 0;         // largest clump (molecule) ID when the fix was defined
 
   std::string id_rigid, id_ke, id_erot, id_local;
-  std::string bodies_file;    // infile written for rigid/small (density mode), rank 0
+  std::string bodies_file;    // infile written for rigid/small, rank 0
+
+  // ---- restart
+  // clump record: mol, mass, xcm[3], vcm[3], quat[4], inertia[3], ex[3], ey[3], ez[3],
+  // angmom[3], omega[3], conjqm[4], image
+  static constexpr int NREC = 35;
+  double **rdisp = nullptr;          // per atom: restored body-frame offset [0..2], valid [3]
+  std::vector<double> rrecords;      // clump records unpacked on this rank
+  std::map<tagint, std::vector<double>> restored;    // all clump records (every rank)
+  bool restart_has_state = false;    // the restart file holds the clump state
+  double restart_density = 0.0;      // density of the run that wrote it (0: infile)
+  bool restore_pending = false;      // put the state back at the next setup
+  bool write_exact = false;          // the restart being written has the clump state
+  bool restart_warned = false;
 
   Fix *rigid_fix();
+  class RigidSmallLayout *rigid_layout(std::string &why);
   void setup_templates();
   void write_bodies_file();
+  void write_restored_bodies_file();
+  void copy_user_infile();
+  void restore_state();
 };
 
 }    // namespace LAMMPS_NS

@@ -1,0 +1,359 @@
+// fix clump/rigid and restart / data files (issue #10):
+//  - a run split by write_restart / read_restart equals the unsplit run: bit for bit on one
+//    rank, to 1e-12 on two (registered twice: serial and mpirun -np 2). The system has clumps
+//    of three shapes with charged pebbles, kspace kifmm with fix kifmm/stride 5 (the split is
+//    not on a multiple of 5: the held forces come from the restart file), granular contacts
+//    with a wall, an electric field; mass properties, positions, orientations and motion of
+//    the clumps and every pebble's position and velocity are compared;
+//  - control: re-specifying the fix under another ID (the stored state is not used) gives a
+//    different run, so the comparison can fail;
+//  - a changed density after read_restart: warning, stored state not used;
+//  - write_data: warning and a comment in the data file; after read_data the re-specified
+//    fix recovers the clumps (count, union mass to the integration accuracy, motion).
+#include "clump_test_util.h"
+
+#include "package_styles.h"
+
+#include "atom.h"
+#include "input.h"
+#include "lammps.h"
+
+#include <gtest/gtest.h>
+#include <mpi.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+using namespace clump_test;
+using LAMMPS_NS::LAMMPS;
+
+namespace {
+
+int world_rank()
+{
+  int me;
+  MPI_Comm_rank(MPI_COMM_WORLD, &me);
+  return me;
+}
+
+int world_size()
+{
+  int n;
+  MPI_Comm_size(MPI_COMM_WORLD, &n);
+  return n;
+}
+
+LAMMPS *make_lammps(MPI_Comm comm, const std::string &log = "none")
+{
+  std::vector<std::string> args = {"clump_restart", "-log", log, "-nocite", "-echo", "none"};
+  if (!std::getenv("KIFMM_TEST_VERBOSE")) {
+    args.push_back("-screen");
+    args.push_back("none");
+  }
+  std::vector<char *> argv;
+  for (auto &a : args) argv.push_back(const_cast<char *>(a.c_str()));
+  argv.push_back(nullptr);
+  auto *lmp = new LAMMPS((int) args.size(), argv.data(), comm);
+  kifmm_lammps::add_package_styles(lmp);
+  return lmp;
+}
+
+void run_script(LAMMPS *lmp, const std::string &script)
+{
+  std::istringstream in(script);
+  std::string line;
+  while (std::getline(in, line))
+    if (line.find_first_not_of(" \t") != std::string::npos) lmp->input->one(line);
+}
+
+// file names shared by the ranks of MPI_COMM_WORLD (rank 0's scratch directory)
+std::string shared_name(const std::string &name)
+{
+  std::string dir = scratch_dir().string();
+  int len = (int) dir.size();
+  MPI_Bcast(&len, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  dir.resize(len);
+  MPI_Bcast(&dir[0], len, MPI_CHAR, 0, MPI_COMM_WORLD);
+  return dir + "/" + name;
+}
+
+// styles that restart files do not keep (re-specified after read_restart)
+const char *const FORCES = R"(
+neigh_modify every 1 delay 0 check no
+fix wall all wall/gran hooke 200.0 NULL 30.0 NULL 0.5 1 zplane -0.05 NULL
+fix ef all efield 2.0e-3 0.0 -1.0e-3
+dielectric 1.0e13
+kspace_style kifmm 1e-6
+fix st all kifmm/stride 5
+thermo_style custom step
+)";
+
+std::string system_script(const std::string &dimer_file, const std::string &asym_file)
+{
+  std::ostringstream s;
+  s << R"(
+units si
+atom_style hybrid sphere charge
+atom_modify map array sort 0 0.0
+boundary f f f
+fix prop all property/atom mol ghost yes
+region box block -0.2 0.2 -0.05 0.05 -0.05 0.05
+create_box 2 box
+mass * 1.0
+comm_modify cutoff 0.04 vel yes
+neighbor 0.002 bin
+timestep 1e-4
+)";
+  s << "molecule dim " << dimer_file << "\nmolecule asym " << asym_file << "\nmolecule dip "
+    << potentials << "/dipole3.mol\n";
+  // a row of clumps along x, one straddling x = 0 (the processor boundary on 2 ranks)
+  const char *shape[] = {"dim", "asym", "dip", "dim", "asym", "dip", "dim", "asym"};
+  for (int k = 0; k < 8; ++k) {
+    double x = -0.17 + 0.045 * k;
+    s << "create_atoms 0 single " << x << " " << 0.003 * (k % 3) << " " << -0.030 + 0.003 * (k % 2)
+      << " mol " << shape[k] << " " << 100 + k << " rotate " << 17 * k + 5 << " 1 " << k % 3
+      << " 2\n";
+  }
+  // the dimers and the asymmetric clumps get charges too
+  s << R"(
+set type 1 charge 0.25
+pair_style gran/hooke/history 200.0 NULL 30.0 NULL 0.5 1
+pair_coeff * *
+variable vx atom 0.3*sin(40*x)+0.1*cos(60*y)
+variable vy atom 0.05*cos(30*x)
+velocity all set v_vx v_vy -1.0
+)";
+  s << FORCES << "fix c all clump/rigid density 2500\n";
+  return s.str();
+}
+
+// x, v, omega of every atom by ID (all ranks)
+std::map<long, std::vector<double>> atoms_by_id(LAMMPS *lmp)
+{
+  auto *a = lmp->atom;
+  std::vector<double> mine;
+  for (int i = 0; i < a->nlocal; ++i) {
+    mine.push_back((double) a->tag[i]);
+    for (int d = 0; d < 3; ++d) mine.push_back(a->x[i][d]);
+    for (int d = 0; d < 3; ++d) mine.push_back(a->v[i][d]);
+    for (int d = 0; d < 3; ++d) mine.push_back(a->omega[i][d]);
+  }
+  int n = (int) mine.size(), nprocs;
+  MPI_Comm_size(lmp->world, &nprocs);
+  std::vector<int> counts(nprocs), displs(nprocs);
+  MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, lmp->world);
+  int total = 0;
+  for (int p = 0; p < nprocs; ++p) {
+    displs[p] = total;
+    total += counts[p];
+  }
+  std::vector<double> all(total);
+  MPI_Allgatherv(mine.data(), n, MPI_DOUBLE, all.data(), counts.data(), displs.data(),
+                 MPI_DOUBLE, lmp->world);
+  std::map<long, std::vector<double>> out;
+  for (int k = 0; k + 10 <= total; k += 10)
+    out[(long) all[k]] = std::vector<double>(all.begin() + k + 1, all.begin() + k + 10);
+  return out;
+}
+
+struct State {
+  std::map<long, std::vector<double>> atoms;
+  std::map<int, std::vector<double>> clumps;
+};
+
+State state_of(LAMMPS *lmp, const std::string &fix_id = "c")
+{
+  return {atoms_by_id(lmp), clump_rows(lmp, fix_id)};
+}
+
+// largest |a - b| / (1 + |a|) over atoms and clump rows (columns that define the state)
+double max_rel_diff(const State &a, const State &b)
+{
+  double d = 0.0;
+  if (a.atoms.size() != b.atoms.size() || a.clumps.size() != b.clumps.size()) return 1e300;
+  for (const auto &[id, va] : a.atoms) {
+    const auto &vb = b.atoms.at(id);
+    for (size_t k = 0; k < va.size(); ++k)
+      d = std::max(d, std::fabs(va[k] - vb[k]) / (1.0 + std::fabs(va[k])));
+  }
+  for (const auto &[mol, ra] : a.clumps) {
+    const auto &rb = b.clumps.at(mol);
+    for (int k : {MASS, XU, YU, ZU, VX, VY, VZ, FX, FY, FZ, TQX, TQY, TQZ, OMEGAX, OMEGAY, OMEGAZ,
+                  ANGMOMX, ANGMOMY, ANGMOMZ, QUATW, QUATI, QUATJ, QUATK, INERTIAX, INERTIAY,
+                  INERTIAZ})
+      d = std::max(d, std::fabs(ra[k] - rb[k]) / (1.0 + std::fabs(ra[k])));
+  }
+  return d;
+}
+
+bool bitwise_equal(const State &a, const State &b)
+{
+  if (a.atoms != b.atoms) return false;
+  if (a.clumps.size() != b.clumps.size()) return false;
+  for (const auto &[mol, ra] : a.clumps) {
+    if (ra != b.clumps.at(mol)) return false;    // every column of compute rigid/local
+  }
+  return true;
+}
+
+class ClumpRestart : public ::testing::Test {
+ protected:
+  std::string dimer_file, asym_file, script;
+  void SetUp() override
+  {
+    dimer_file = shared_name("dimer.mol");
+    asym_file = shared_name("asym.mol");
+    if (world_rank() == 0) {
+      write_molecule("dimer", dimer());
+      write_molecule("asym", asymmetric());
+    }
+    MPI_Barrier(MPI_COMM_WORLD);
+    script = system_script(dimer_file, asym_file);
+  }
+
+  // read the restart file and re-specify what it does not keep
+  std::string restarted(const std::string &file, const std::string &fix_line)
+  {
+    return "read_restart " + file + "\nfix prop all property/atom mol ghost yes\n" + FORCES +
+        fix_line + "\n";
+  }
+};
+
+TEST_F(ClumpRestart, SplitRunEqualsTheUnsplitRun)
+{
+  const int nprocs = world_size();
+  const std::string file = shared_name("split.restart");
+
+  LAMMPS *lmp = make_lammps(MPI_COMM_WORLD);
+  run_script(lmp, script + "run 150 post no");
+  const State unsplit = state_of(lmp);
+  delete lmp;
+
+  lmp = make_lammps(MPI_COMM_WORLD);
+  run_script(lmp, script + "run 67 post no\nwrite_restart " + file);
+  const State before = state_of(lmp);
+  delete lmp;
+
+  // mass properties and state survive the restart file (checked after run 0)
+  lmp = make_lammps(MPI_COMM_WORLD);
+  run_script(lmp, restarted(file, "fix c all clump/rigid density 2500") + "run 0 post no");
+  const State at_restart = state_of(lmp);
+  delete lmp;
+  ASSERT_EQ(at_restart.clumps.size(), 8u);
+  for (const auto &[mol, r] : before.clumps) {
+    const auto &s = at_restart.clumps.at(mol);
+    SCOPED_TRACE(testing::Message() << "clump " << mol);
+    EXPECT_EQ(s[MASS], r[MASS]);
+    for (int k : {INERTIAX, INERTIAY, INERTIAZ, QUATW, QUATI, QUATJ, QUATK, XU, YU, ZU, VX, VY,
+                  VZ, ANGMOMX, ANGMOMY, ANGMOMZ})
+      EXPECT_EQ(s[k], r[k]) << "column " << k;
+  }
+
+  lmp = make_lammps(MPI_COMM_WORLD);
+  run_script(lmp, restarted(file, "fix c all clump/rigid density 2500") + "run 83 post no");
+  const State split = state_of(lmp);
+  delete lmp;
+
+  // control: the fix under another ID does not take the stored state
+  lmp = make_lammps(MPI_COMM_WORLD);
+  run_script(lmp, restarted(file, "fix c2 all clump/rigid density 2500") + "run 83 post no");
+  const State control = state_of(lmp, "c2");
+  delete lmp;
+
+  // the run had contacts with the wall: they slowed clumps that came at it with vz = -1
+  double vz_max = -1e300;
+  for (const auto &[mol, r] : unsplit.clumps) vz_max = std::max(vz_max, r[VZ]);
+  EXPECT_GT(vz_max, -0.5) << "some clump was slowed down by the wall";
+
+  // control: compare the pebbles only (a recomputed clump may get other principal axes, i.e.
+  // another quaternion, for the same orientation)
+  const State unsplit_atoms{unsplit.atoms, {}}, control_atoms{control.atoms, {}};
+  const double d = max_rel_diff(unsplit, split), dc = max_rel_diff(unsplit_atoms, control_atoms);
+  if (world_rank() == 0)
+    std::printf("  %d rank(s): split vs unsplit %.3g (relative), without the stored state %.3g\n",
+                nprocs, d, dc);
+  if (nprocs == 1) {
+    EXPECT_TRUE(bitwise_equal(unsplit, split)) << "largest relative difference " << d;
+  } else {
+    EXPECT_LT(d, 1e-12);
+  }
+  EXPECT_GT(dc, 1e-13) << "without the stored state the run must differ";
+}
+
+TEST_F(ClumpRestart, ChangedDensityRecomputesWithAWarning)
+{
+  const std::string file = shared_name("density.restart");
+  const std::string log = shared_name("density.log");
+  LAMMPS *lmp = make_lammps(MPI_COMM_WORLD);
+  run_script(lmp, script + "run 10 post no\nwrite_restart " + file);
+  const State before = state_of(lmp);
+  delete lmp;
+  lmp = make_lammps(MPI_COMM_WORLD, log);
+  run_script(lmp, restarted(file, "fix c all clump/rigid density 5000") + "run 0 post no");
+  const State after = state_of(lmp);
+  delete lmp;
+  for (const auto &[mol, r] : before.clumps)
+    EXPECT_NEAR(after.clumps.at(mol)[MASS] / r[MASS], 2.0, 2e-6) << "clump " << mol;
+  if (world_rank() == 0) {
+    std::ifstream f(log);
+    std::stringstream text;
+    text << f.rdbuf();
+    EXPECT_NE(text.str().find("WARNING: Fix clump/rigid c: the restart file holds clumps of "
+                              "density 2500, the fix now asks for density 5000"),
+              std::string::npos)
+        << text.str();
+  }
+}
+
+TEST_F(ClumpRestart, WriteDataWarnsAndReadDataRecoversTheClumps)
+{
+  const std::string data = shared_name("clumps.data");
+  const std::string log = shared_name("write_data.log");
+  LAMMPS *lmp = make_lammps(MPI_COMM_WORLD, log);
+  run_script(lmp, script + "run 30 post no\nwrite_data " + data);
+  const State before = state_of(lmp);
+  delete lmp;
+  if (world_rank() == 0) {
+    std::ifstream f(log);
+    std::stringstream text;
+    text << f.rdbuf();
+    EXPECT_NE(text.str().find("WARNING: Fix clump/rigid c: write_data stores the pebbles and "
+                              "their molecule IDs, not the clump state"),
+              std::string::npos);
+    std::ifstream d(data);
+    std::stringstream dtext;
+    dtext << d.rdbuf();
+    EXPECT_NE(dtext.str().find("# fix clump/rigid c: clumps are the molecules of group all"),
+              std::string::npos);
+  }
+
+  lmp = make_lammps(MPI_COMM_WORLD);
+  run_script(lmp, R"(
+units si
+atom_style hybrid sphere charge
+atom_modify map array sort 0 0.0
+boundary f f f
+fix prop all property/atom mol ghost yes
+comm_modify cutoff 0.04 vel yes
+neighbor 0.002 bin
+timestep 1e-4
+read_data )" + data + R"( fix prop NULL Molecules
+)" + FORCES + "fix c all clump/rigid density 2500\nrun 0 post no");
+  const State after = state_of(lmp);
+  delete lmp;
+  ASSERT_EQ(after.clumps.size(), 8u);
+  for (const auto &[mol, r] : before.clumps) {
+    const auto &s = after.clumps.at(mol);
+    SCOPED_TRACE(testing::Message() << "clump " << mol);
+    // union mass recomputed for the rotated clump: equal to the integration accuracy (tol 1e-5)
+    EXPECT_NEAR(s[MASS] / r[MASS], 1.0, 1e-6);
+    for (int k : {XU, YU, ZU}) EXPECT_NEAR(s[k], r[k], 1e-9);
+    for (int k : {VX, VY, VZ}) EXPECT_NEAR(s[k], r[k], 1e-9);
+    for (int k : {ANGMOMX, ANGMOMY, ANGMOMZ})
+      EXPECT_NEAR(s[k], r[k], 1e-6 * std::fabs(r[k]) + 1e-15);
+  }
+}
+
+}    // namespace

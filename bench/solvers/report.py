@@ -370,6 +370,10 @@ def make_plots(recs, outdir, cases, profile):
         fig.savefig(fn, dpi=110)
         files["error_vs_order"] = fn
     plt.close(fig)
+    # Pareto plots of cases without results here (an older campaign's) would be stale
+    for fn in os.listdir(outdir):
+        if re.fullmatch(r"pareto_.*\.png", fn) and fn[:-4] not in files:
+            os.remove(os.path.join(outdir, fn))
     return files
 
 
@@ -826,9 +830,14 @@ reference, in one invocation of the driver (`bench/solvers/run_bench.py` calling
   (all N sources, the 4000 sampled targets, CPU time) and scaled by N / 4000 (exact for a
   sum whose cost is N targets x N sources): marked `(s)`.
 * Competitors at N >= 5e4 (msm, ewald, pppm) run only the settings that were on that
-  solver's Pareto front at the previous N of the case; a setting whose predicted time (from
-  the previous N as N, N^1.5 for ewald, N^2 for direct sums) exceeds the per-run limit
-  (600 s) is recorded as skipped, not run.
+  solver's Pareto front at the previous N of the case; a setting whose predicted CPU time
+  (from the largest smaller N where it ran, scaled as N; as N^2 for direct sums and for
+  ewald, whose k vectors grow as N with a cutoff of a fixed number of spacings) exceeds the
+  per-run limit of 600 s CPU is recorded as skipped, not run; a run is stopped at 600 s CPU
+  (or 2400 s wall) and recorded as timeout. The first runs of the campaign (uniform,
+  plummer up to N = 1e5, uniform_periodic, plummer_periodic) predicted from wall times at
+  any smaller N with N^1.5 for ewald; settings they skipped are judged again by a later
+  pass of the driver (`skipped` rows that remain are the final judgement).
 * **periodic cases** (`boundary p p p`, the unit cube as the cell, same configurations):
   kifmm (periodic mode of the style) against LAMMPS `ewald` and `pppm` with
   `pair_style coul/long C*s` (`pair_modify table 0`, accuracy A*F_rms as for msm; pppm

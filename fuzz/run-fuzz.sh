@@ -15,7 +15,10 @@ build_and_run() {
   "$CXX" $flags -I"$root/src/KIFMM" -I"$root/src/RIGID_CLUMP" "$@" -o "$out/$name"
   mkdir -p "$out/corpus-$name"
   cp -n "$root/fuzz/corpus/$name/"* "$out/corpus-$name/" 2>/dev/null || true
-  if ! (cd "$out" && "./$name" -max_total_time="$secs" -print_final_stats=1 "corpus-$name" \
+  local dict=()
+  [ -e "$root/fuzz/$name.dict" ] && dict=(-dict="$root/fuzz/$name.dict")
+  if ! (cd "$out" && "./$name" -max_total_time="$secs" -timeout=20 -max_len=8192 \
+        "${dict[@]}" -print_final_stats=1 "corpus-$name" \
         > "$name.log" 2>&1); then
     echo "fuzz: $name FAILED (see $out/$name.log and the crash-* file there)"; tail -30 "$out/$name.log"
     status=1
@@ -27,6 +30,7 @@ build_and_run kifmm_keywords "$root/fuzz/fuzz_kifmm_keywords.cpp" "$root/src/KIF
 for target in "$root"/fuzz/fuzz_clump_*.cpp; do
   [ -e "$target" ] || continue
   name="$(basename "$target" .cpp)"; name="${name#fuzz_}"
-  build_and_run "$name" "$target" ${KIFMM_FUZZ_EXTRA_SOURCES:-}
+  build_and_run "$name" "$target" "$root/src/RIGID_CLUMP/clump_template.cpp" \
+    "$root/src/RIGID_CLUMP/clump_union.cpp" ${KIFMM_FUZZ_EXTRA_SOURCES:-}
 done
 exit $status

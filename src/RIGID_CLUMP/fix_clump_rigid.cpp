@@ -1,6 +1,7 @@
 #include "fix_clump_rigid.h"
 
 #include "clump_math.h"
+#include "clump_template.h"
 #include "clump_union.h"
 #include "molecule_layout.h"
 #include "rigid_small_layout.h"
@@ -59,18 +60,6 @@ void matrix_to_itensor(const Mat3 &m, double t[6])
   t[3] = 0.5 * (m[1][2] + m[2][1]);
   t[4] = 0.5 * (m[0][2] + m[2][0]);
   t[5] = 0.5 * (m[0][1] + m[1][0]);
-}
-
-std::string duplicates_message(const std::vector<clump::Sphere> &s,
-                               const std::vector<std::array<int, 2>> &dups,
-                               const std::vector<long> &labels)
-{
-  std::ostringstream msg;
-  const auto &d = dups.front();
-  msg << dups.size() << " pair(s) of duplicate (coincident) pebbles, first: pebbles "
-      << labels[d[0]] << " and " << labels[d[1]] << " at (" << s[d[0]].x[0] << ", "
-      << s[d[0]].x[1] << ", " << s[d[0]].x[2] << ")";
-  return msg.str();
 }
 
 }    // namespace
@@ -381,19 +370,13 @@ void FixClumpRigid::setup_templates()
       error->all(FLERR, "Fix clump/rigid molecule template {} needs Coords and Diameters "
                  "sections (pebble radii)", template_id);
     std::vector<clump::Sphere> s(mol->natoms);
-    std::vector<long> labels(mol->natoms);
     for (int i = 0; i < mol->natoms; ++i) {
       for (int d = 0; d < 3; ++d) s[i].x[d] = mol->x[i][d];
       s[i].r = mol->radius[i];
-      labels[i] = i + 1;
-      if (!(s[i].r > 0.0))
-        error->all(FLERR, "Fix clump/rigid molecule template {}: pebble {} has diameter <= 0",
-                   template_id, i + 1);
     }
-    auto dups = clump::duplicate_spheres(s);
-    if (!dups.empty())
-      error->all(FLERR, "Fix clump/rigid molecule template {}: {}", template_id,
-                 duplicates_message(s, dups, labels));
+    std::string why = clump::check_pebbles(s);
+    if (!why.empty())
+      error->all(FLERR, "Fix clump/rigid molecule template {}: {}", template_id, why);
 
     if (density > 0.0) {
       double t0 = MPI_Wtime();
@@ -511,10 +494,9 @@ void FixClumpRigid::write_bodies_file()
         rmin = std::min(rmin, a[8]);
         key.push_back(std::llround(a[8] / rmax * 1e9));
       }
-      auto dups = clump::duplicate_spheres(s);
-      if (!dups.empty()) {
-        errmsg = fmt::format("clump (molecule ID) {}: {} (atom IDs)", (long) mol,
-                             duplicates_message(s, dups, labels));
+      std::string why = clump::check_pebbles(s, labels);
+      if (!why.empty()) {
+        errmsg = fmt::format("clump (molecule ID) {}: {} (atom IDs)", (long) mol, why);
         break;
       }
       std::vector<Vec3> rel(np);

@@ -2,11 +2,13 @@
 // the exact lens / solid-of-revolution formulas, disjoint and nested spheres, rotation
 // invariance, duplicate detection; the small linear algebra of fix clump/rigid.
 #include "clump_math.h"
+#include "clump_template.h"
 #include "clump_union.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <vector>
 
 using namespace clump;
@@ -183,6 +185,50 @@ TEST(ClumpUnion, DuplicatePebblesAreFound)
   EXPECT_EQ(d[0][0], 0);
   EXPECT_EQ(d[0][1], 2);
   EXPECT_TRUE(duplicate_spheres({{{0, 0, 0}, 1.0}, {{0.01, 0, 0}, 1.0}}).empty());
+}
+
+// Regression tests of the fuzz target fuzz/fuzz_clump_template.cpp (inputs in
+// fuzz/corpus/clump_template/crash-* and regression-*): before check_pebbles, a coordinate
+// that overflows to +-inf (e.g. "1e400", which LAMMPS's molecule reader accepts), or
+// coordinates around 1e300, made the duplicate search convert an out-of-range double to long
+// (UBSan: "-inf is outside the range of representable values of type 'long'"). Every such
+// template is now refused with a message naming the pebble.
+TEST(ClumpTemplate, FuzzFindingsAreClearErrors)
+{
+  using clump::check_pebbles;
+  const double inf = std::numeric_limits<double>::infinity();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<clump::Sphere> dimer = {{{-0.003, 0, 0}, 0.005}, {{0.003, 0, 0}, 0.005}};
+  EXPECT_EQ(check_pebbles(dimer), "");
+
+  auto s = dimer;
+  s[1].x[1] = -inf;    // crash-430ac97c: "-0.01011e3087108" overflows to -inf
+  EXPECT_EQ(check_pebbles(s), "pebble 2 has a non-finite coordinate (0.003, -inf, 0)");
+  s = dimer;
+  s[0].x[2] = nan;
+  EXPECT_EQ(check_pebbles(s, {11, 12}), "pebble 11 has a non-finite coordinate (-0.003, 0, nan)");
+  s = dimer;
+  s[0].x[0] = 1e300;    // regression-huge-coordinates
+  s[1].x[0] = -1e300;
+  EXPECT_EQ(check_pebbles(s), "pebble 2 is farther than 1e+09 largest radii from pebble 1 (not a clump)");
+  s = dimer;    // far from the origin but a fine clump: no overflow in the duplicate search
+  s[0].x[0] = 1e300;
+  s[1].x[0] = 1e300;
+  s[1].x[1] = 0.006;
+  EXPECT_EQ(check_pebbles(s), "");
+  s[1].x[1] = 0.0;
+  EXPECT_EQ(check_pebbles(s).rfind("1 pair(s) of duplicate (coincident) pebbles, first: pebbles 1 and 2", 0), 0u);
+  s = dimer;
+  s[1].r = inf;
+  EXPECT_EQ(check_pebbles(s), "pebble 2 has diameter inf (must be finite and > 0)");
+  s[1].r = 0.0;
+  EXPECT_EQ(check_pebbles(s), "pebble 2 has diameter 0 (must be finite and > 0)");
+  s[1].r = nan;
+  EXPECT_EQ(check_pebbles(s), "pebble 2 has diameter nan (must be finite and > 0)");
+  s[1].r = 5e-303;    // regression-radius-ratio
+  EXPECT_EQ(check_pebbles(s),
+            "pebble diameters from 1e-302 to 0.01: a ratio above 1e+06 is not supported");
+  EXPECT_EQ(check_pebbles({}), "no pebbles");
 }
 
 TEST(ClumpMath, BestRotationRecoversRotation)

@@ -746,6 +746,30 @@ TEST_F(FixClumpRigidTest, TruncatedOrMalformedTemplateIsAnError)
                       "template nd needs Coords and Diameters");
 }
 
+// Regression of the fuzz target fuzz/fuzz_clump_template.cpp: LAMMPS's molecule reader takes
+// "1e400" (an infinite coordinate) and 1e300 coordinates; fix clump/rigid refuses them with a
+// message naming the template and the pebble (before: undefined behaviour in the duplicate
+// search).
+TEST_F(FixClumpRigidTest, TemplateWithOverflowingCoordinatesIsAnError)
+{
+  auto dir = std::filesystem::path(dimer_file).parent_path();
+  auto inf = (dir / "inf.mol").string();
+  std::ofstream(inf) << "# overflow\n\n2 atoms\n\nCoords\n\n1 0 0 0\n2 1e400 0 0\n\n"
+                        "Diameters\n\n1 0.01\n2 0.01\n";
+  auto far = (dir / "far.mol").string();
+  std::ofstream(far) << "# far\n\n2 atoms\n\nCoords\n\n1 1e300 0 0\n2 -1e300 0 0\n\n"
+                        "Diameters\n\n1 0.01\n2 0.01\n";
+  commands(box_commands());
+  command("molecule inf " + inf);
+  command("molecule far " + far);
+  EXPECT_LAMMPS_ERROR(command("fix c all clump/rigid density 2500 mol inf"),
+                      "ERROR: Fix clump/rigid molecule template inf: pebble 2 has a non-finite "
+                      "coordinate \\(inf, 0, 0\\)");
+  EXPECT_LAMMPS_ERROR(command("fix c all clump/rigid density 2500 mol far"),
+                      "ERROR: Fix clump/rigid molecule template far: pebble 2 is farther than "
+                      "1e\\+09 largest radii from pebble 1");
+}
+
 TEST_F(FixClumpRigidTest, BadArgumentsAreErrors)
 {
   commands(box_commands());

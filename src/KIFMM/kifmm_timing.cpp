@@ -13,8 +13,10 @@
 
 using namespace LAMMPS_NS;
 
-void KIFMMTiming::add(const kifmm::Stats &s, double comm, double total, std::size_t targets)
+void KIFMMTiming::add(const kifmm::Stats &s, double comm, double total, std::size_t targets,
+                      std::size_t bytes_sent)
 {
+  bytes += (double) bytes_sent;
   const double engine[] = {s.t_tree, s.t_lists, s.t_upward, s.t_m2l, s.t_wx, s.t_downward, s.t_p2p};
   double used = comm;
   for (int k = 0; k < 7; ++k) {
@@ -43,10 +45,11 @@ void LAMMPS_NS::print_kifmm_timing(LAMMPS *lmp, const KIFMMTiming &timing)
   MPI_Comm world = lmp->world;
   int nprocs = 1;
   MPI_Comm_size(world, &nprocs);
-  const int n = KIFMMTiming::NPHASES + 1;
+  const int n = KIFMMTiming::NPHASES + 2;
   double mine[n], lo[n], hi[n], sum[n];
   for (int k = 0; k < KIFMMTiming::NPHASES; ++k) mine[k] = timing.t[k];
   mine[KIFMMTiming::NPHASES] = timing.points;
+  mine[KIFMMTiming::NPHASES + 1] = timing.bytes;
   MPI_Allreduce(mine, lo, n, MPI_DOUBLE, MPI_MIN, world);
   MPI_Allreduce(mine, hi, n, MPI_DOUBLE, MPI_MAX, world);
   MPI_Allreduce(mine, sum, n, MPI_DOUBLE, MPI_SUM, world);
@@ -63,6 +66,11 @@ void LAMMPS_NS::print_kifmm_timing(LAMMPS *lmp, const KIFMMTiming &timing)
   for (int k = 0; k < KIFMMTiming::NPHASES; ++k)
     mesg += fmt::format("{:<8} | {:<10.4g} | {:<10.4g} | {:<10.4g} | {:6.2f}\n", names[k], lo[k],
                         sum[k] / nprocs, hi[k], total > 0 ? 100.0 * sum[k] / nprocs / total : 0.0);
+  // communication volume: bytes this rank sent per evaluation (ghost atoms, reductions)
+  const int b = KIFMMTiming::NPHASES + 1;
+  const double ev = (double) timing.evaluations;
+  mesg += fmt::format("{:<8} | {:<10.4g} | {:<10.4g} | {:<10.4g} | bytes sent per rank and evaluation\n",
+                      "Comm B", lo[b] / ev, sum[b] / nprocs / ev, hi[b] / ev);
   const double avg_points = sum[KIFMMTiming::NPHASES] / nprocs;
   mesg += fmt::format(
       "Load: atoms of nonzero strength per rank and evaluation min/avg/max = {:.4g} / {:.4g} / "

@@ -19,10 +19,11 @@ struct KIFMMTiming {
   double t[NPHASES] = {};
   long evaluations = 0;
   double points = 0;    // sum over evaluations of this rank's targets
+  double bytes = 0;     // sum over evaluations of the bytes this rank sent (communication volume)
 
   void reset() { *this = KIFMMTiming(); }
-  // adds one evaluation: engine phases from its stats, comm measured by the adapter, total
-  void add(const kifmm::Stats &s, double comm, double total, std::size_t targets);
+  // adds one evaluation: engine phases from its stats, comm time and bytes sent, total
+  void add(const kifmm::Stats &s, double comm, double total, std::size_t targets, std::size_t bytes_sent = 0);
 };
 
 class FixKIFMMTiming : public Fix {

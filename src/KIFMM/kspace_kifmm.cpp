@@ -1,6 +1,8 @@
 #include "kspace_kifmm.h"
 
 #include "fix_kifmm_stride.h"
+#include "distributed.h"
+#include "mpi_communicator.h"
 #include "periodic.h"
 
 #include "atom.h"
@@ -157,6 +159,7 @@ void KSpaceKIFMM::init()
   }
   engine_options = engine->options();
   estimated_error = est;
+  kcomm = std::make_unique<kifmm::MpiCommunicator>(world);
 
   // the end-of-run time breakdown is printed by an internal fix (fixes get post_run)
   if (modify->find_fix(timing_fix_id) < 0)
@@ -176,6 +179,14 @@ void KSpaceKIFMM::init()
       mesg += "  order set by kspace_modify: error not estimated (use check to measure it)\n";
     mesg += fmt::format("  operator cache = {}\n",
                         engine_options.cache_dir.empty() ? "memory only" : engine_options.cache_dir);
+    if (comm->nprocs > 1 && distributed())
+      mesg += fmt::format("  MPI: distributed over {} ranks (top tree level {}, ghost atoms near each "
+                          "rank's cells; no all-gather)\n",
+                          comm->nprocs, kifmm::default_top_level(comm->nprocs));
+    else if (comm->nprocs > 1)
+      mesg += fmt::format("  MPI: periodic boundaries: the atoms of all {} ranks are all-gathered on "
+                          "every rank (distributed evaluation is for open boundaries only)\n",
+                          comm->nprocs);
     utils::logmesg(lmp, mesg);
   }
 }
@@ -260,8 +271,10 @@ void KSpaceKIFMM::gather_points()
 void KSpaceKIFMM::gather_sources()
 {
   replicated = comm->nprocs > 1;
+  gather_bytes = 0;
   if (!replicated) return;
   const int nprocs = comm->nprocs, mine = (int) index.size();
+  gather_bytes = (std::size_t) (nprocs - 1) * (32 * (std::size_t) mine + sizeof(int));
   std::vector<int> counts(nprocs), displs(nprocs), counts3(nprocs), displs3(nprocs);
   MPI_Allgather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, world);
   int total = 0;
@@ -319,24 +332,32 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   gather_points();
   const std::size_t n = index.size();
 
-  // sources: the atoms of nonzero strength of all ranks; targets: this rank's
-  // (a replicated source set until the distributed engine lands)
-  const double t_comm = MPI_Wtime();
-  gather_sources();
-  const double comm_time = MPI_Wtime() - t_comm;
-  const std::size_t nsrc = source_strength().size();
-  const double *sx = source_xyz().data(), *ss = source_strength().data();
-
   if (periodic) periodic_cell();    // the box is the cell (it may have changed)
-  check_memory(nsrc);
   const bool want_potential = eflag_global || eflag_atom || keep || (periodic && vflag_global);
   pot.assign(want_potential ? n : 0, 0.0);
   grad.assign(3 * n, 0.0);
-  if (nsrc > 0)
-    engine->evaluate(nsrc, sx, ss, n, xyz.data(), want_potential ? pot.data() : nullptr,
-                     grad.data());
+  double comm_time = 0;
+  std::size_t nsrc = 0;    // sources of all ranks (same value on every rank)
+  if (distributed()) {
+    // open boundaries: each rank passes its own atoms (collective; ghosts are exchanged inside)
+    check_memory(n);
+    engine->evaluate_distributed(*kcomm, n, xyz.data(), strength.data(),
+                                 want_potential ? pot.data() : nullptr, grad.data());
+    comm_time = engine->stats().t_comm;
+    nsrc = engine->stats().n_sources;
+  } else {
+    // periodic: sources are the atoms of nonzero strength of all ranks, targets this rank's
+    const double t_comm = MPI_Wtime();
+    gather_sources();
+    comm_time = MPI_Wtime() - t_comm;
+    nsrc = source_strength().size();
+    check_memory(nsrc);
+    if (nsrc > 0)
+      engine->evaluate(nsrc, source_xyz().data(), source_strength().data(), n, xyz.data(),
+                       want_potential ? pot.data() : nullptr, grad.data());
+  }
   const kifmm::Stats no_work;
-  const kifmm::Stats &phases = nsrc > 0 ? engine->stats() : no_work;
+  const kifmm::Stats &phases = nsrc > 0 || distributed() ? engine->stats() : no_work;
 
   double **f = atom->f;
   const double cf = force_prefactor(), ce = energy_prefactor();
@@ -388,9 +409,10 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
     per_atom_virial(cf, center);
   }
 
-  run_timing.add(phases, comm_time, MPI_Wtime() - t_start, n);
+  run_timing.add(phases, comm_time, MPI_Wtime() - t_start, n,
+                 distributed() ? engine->stats().comm_bytes : gather_bytes);
   if (!reported_first_evaluation) report_first_evaluation();
-  report_coincident_pairs(nsrc > 0 ? engine->stats().coincident_pairs : 0);
+  report_coincident_pairs(nsrc > 0 ? phases.coincident_pairs : 0);
   if (kset.check_every > 0 && update->ntimestep % kset.check_every == 0) check_error();
 }
 
@@ -412,14 +434,19 @@ void KSpaceKIFMM::per_atom_virial(double cf, double center[3])
   MPI_Allreduce(hi, ghi, 3, MPI_DOUBLE, MPI_MAX, world);
   for (int d = 0; d < 3; ++d) center[d] = 0.5 * (glo[d] + ghi[d]);
 
-  // all sources, strengths s_j (x_j,a - c_a)
-  const std::vector<double> &all_xyz = source_xyz(), &all_s = source_strength();
+  // all sources, strengths s_j (x_j,a - c_a): distributed (each rank its own atoms), or the
+  // all-gathered sources (periodic path)
+  const bool dist = distributed();
+  const std::vector<double> &all_xyz = dist ? xyz : source_xyz(), &all_s = dist ? strength : source_strength();
   const std::size_t nsrc = all_s.size();
   std::vector<double> moment(nsrc), g(3 * n);
   for (int a = 0; a < 3; ++a) {
     for (std::size_t j = 0; j < nsrc; ++j) moment[j] = all_s[j] * (all_xyz[3 * j + a] - center[a]);
     std::fill(g.begin(), g.end(), 0.0);
-    engine->evaluate(nsrc, all_xyz.data(), moment.data(), n, xyz.data(), nullptr, g.data());
+    if (dist)
+      engine->evaluate_distributed(*kcomm, n, xyz.data(), moment.data(), nullptr, g.data());
+    else
+      engine->evaluate(nsrc, all_xyz.data(), moment.data(), n, xyz.data(), nullptr, g.data());
     for (std::size_t k = 0; k < n; ++k) {
       const int i = index[k];
       const double s = strength[k];
@@ -447,7 +474,7 @@ void KSpaceKIFMM::check_error()
   // exact gradient on a random sample of this rank's points, by direct summation over all
   // sources; error = ||F_fmm - F_exact|| / ||F_exact|| over the sample
   const std::size_t n = index.size();
-  const std::vector<double> &all_xyz = source_xyz(), &all_s = source_strength();
+  const std::vector<double> &all_xyz = source_xyz(), &all_s = source_strength();    // periodic
   bigint ntotal = 0, nmine = (bigint) n;
   MPI_Allreduce(&nmine, &ntotal, 1, MPI_LMP_BIGINT, MPI_SUM, world);
   std::vector<std::size_t> sample;
@@ -466,7 +493,29 @@ void KSpaceKIFMM::check_error()
   std::vector<double> txyz(3 * sample.size()), exact(3 * sample.size(), 0.0);
   for (std::size_t k = 0; k < sample.size(); ++k)
     for (int d = 0; d < 3; ++d) txyz[3 * k + d] = xyz[3 * sample[k] + d];
-  if (!sample.empty() && periodic)    // Ewald reference (engine/periodic.h)
+  if (distributed()) {
+    // the samples of all ranks on every rank (small); each rank sums its own atoms on them
+    int mine = (int) sample.size(), nprocs = comm->nprocs;
+    std::vector<int> counts(nprocs), displs(nprocs);
+    MPI_Allgather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, world);
+    int total = 0, offset = 0;
+    for (int p = 0; p < nprocs; ++p) {
+      displs[p] = 3 * total;
+      if (p == comm->me) offset = total;
+      total += counts[p];
+      counts[p] *= 3;
+    }
+    std::vector<double> all_t(3 * (std::size_t) total), all_g(3 * (std::size_t) total, 0.0);
+    MPI_Allgatherv(txyz.data(), 3 * mine, MPI_DOUBLE, all_t.data(), counts.data(), displs.data(),
+                   MPI_DOUBLE, world);
+    if (total > 0 && !strength.empty())
+      kifmm::direct_sum(engine->kernel(), strength.size(), xyz.data(), strength.data(),
+                        (std::size_t) total, all_t.data(), nullptr, all_g.data());
+    if (total > 0)
+      MPI_Allreduce(MPI_IN_PLACE, all_g.data(), 3 * total, MPI_DOUBLE, MPI_SUM, world);
+    std::copy(all_g.begin() + 3 * (std::size_t) offset,
+              all_g.begin() + 3 * ((std::size_t) offset + sample.size()), exact.begin());
+  } else if (!sample.empty() && periodic)    // Ewald reference (engine/periodic.h)
     kifmm::periodic_direct_sum(engine->kernel(), engine->options().root_center,
                                engine->options().root_half_width, all_s.size(), all_xyz.data(),
                                all_s.data(), sample.size(), txyz.data(), nullptr, exact.data());
@@ -504,6 +553,21 @@ void KSpaceKIFMM::report_first_evaluation()
                    "  precompute {:.3g} s, operators {:.3g} MB, tree {:.3g} MB\n",
                    s.n_sources, s.depth, s.n_cells, s.n_leaves, s.coincident_pairs,
                    s.t_precompute, s.operator_bytes / 1048576.0, s.tree_bytes / 1048576.0);
+  if (comm->nprocs > 1 && distributed()) {
+    // load and halo of the distributed evaluation, min/avg/max over ranks
+    double mine[3] = {(double) index.size(), (double) s.n_ghosts, (double) s.comm_bytes};
+    double lo[3], hi[3], sum[3];
+    MPI_Allreduce(mine, lo, 3, MPI_DOUBLE, MPI_MIN, world);
+    MPI_Allreduce(mine, hi, 3, MPI_DOUBLE, MPI_MAX, world);
+    MPI_Allreduce(mine, sum, 3, MPI_DOUBLE, MPI_SUM, world);
+    const int np = comm->nprocs;
+    if (comm->me == 0)
+      utils::logmesg(lmp,
+                     "  KIFMM ranks (min/avg/max): atoms {:.0f}/{:.1f}/{:.0f}, ghost atoms "
+                     "{:.0f}/{:.1f}/{:.0f}, bytes sent {:.0f}/{:.0f}/{:.0f}; top tree level {}\n",
+                     lo[0], sum[0] / np, hi[0], lo[1], sum[1] / np, hi[1], lo[2], sum[2] / np, hi[2],
+                     s.top_level);
+  }
 }
 
 const kifmm::Stats &KSpaceKIFMM::engine_stats() const

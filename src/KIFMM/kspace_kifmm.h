@@ -1,9 +1,12 @@
 // kspace_style kifmm: the full long-range sum (no real-space split) by the KIFMM engine.
 // Kernels: coulomb (atom q, qqrd2e), gravity (mass, G, attractive), yukawa (screened coulomb
-// as pair coul/debye). Open boundaries, or p p p with a cubic box (kspace_kifmm_periodic.cpp). Thin adapter: gathers the atoms of nonzero strength,
+// as pair coul/debye). Open boundaries, or p p p with a cubic box (kspace_kifmm_periodic.cpp). Thin adapter: collects the atoms of nonzero strength,
 // calls kifmm::Evaluator, scatters forces, energy and virial. See doc/kspace_kifmm.rst.
+// MPI: open boundaries use the engine's distributed evaluation (each rank passes its own
+// atoms; no all-gather); periodic boundaries still all-gather the sources.
 #pragma once
 
+#include "communicator.h"
 #include "kifmm.h"
 #include "kifmm_keywords.h"
 #include "kifmm_timing.h"
@@ -46,8 +49,12 @@ class KSpaceKIFMM : public KSpace {
   std::vector<int> index;              // local atom index of each point
   std::vector<double> xyz, strength;   // positions, q or m
   std::vector<double> pot, grad;
-  // sources of all ranks (replicated when running on more than one rank)
+  // open boundaries: distributed evaluation over this communicator (world)
+  std::unique_ptr<kifmm::Communicator> kcomm;
+  bool distributed() const { return !periodic; }
+  // periodic: sources of all ranks (replicated when running on more than one rank)
   bool replicated = false;
+  std::size_t gather_bytes = 0;    // bytes this rank sent in gather_sources
   std::vector<double> all_xyz, all_strength;
   const std::vector<double> &source_xyz() const { return replicated ? all_xyz : xyz; }
   const std::vector<double> &source_strength() const { return replicated ? all_strength : strength; }

@@ -837,7 +837,10 @@ reference, in one invocation of the driver (`bench/solvers/run_bench.py` calling
   (or 2400 s wall) and recorded as timeout. The first runs of the campaign (uniform,
   plummer up to N = 1e5, uniform_periodic, plummer_periodic) predicted from wall times at
   any smaller N with N^1.5 for ewald; settings they skipped are judged again by a later
-  pass of the driver (`skipped` rows that remain are the final judgement).
+  pass of the driver (`skipped` rows that remain are the final judgement). At N >= 5e5
+  (the 1e6 runs; limits.large_n) the campaign runs kifmm at acc 1e-2, 1e-3, 1e-5, 1e-7
+  only (enough to bracket the matched errors; the explicit orders are shown up to 1e5) and
+  stops or skips any run above 300 s CPU: campaign time on the shared machine.
 * **periodic cases** (`boundary p p p`, the unit cube as the cell, same configurations):
   kifmm (periodic mode of the style) against LAMMPS `ewald` and `pppm` with
   `pair_style coul/long C*s` (`pair_modify table 0`, accuracy A*F_rms as for msm; pppm

@@ -764,7 +764,7 @@ void FixClumpRigid::restore_state()
     }
     for (int k = 0; k < 4; ++k) {
       body.quat[k] = r[8 + k];
-      body.conjqm[k] = r[30 + k];
+      if (integrator == "rigid/nve/small") body.conjqm[k] = r[30 + k];
     }
     body.image = (imageint) r[34];
     if (b < v->nlocal_body) ++nset;
@@ -873,9 +873,11 @@ int FixClumpRigid::pack_restart(int i, double *buf)
     r[24 + d] = b.angmom[d];
     r[27 + d] = b.omega[d];
   }
+  // conjqm is state only for rigid/nve/small (rigid/small never sets it: uninitialised)
+  const bool nve = integrator == "rigid/nve/small";
   for (int k = 0; k < 4; ++k) {
     r[8 + k] = b.quat[k];
-    r[30 + k] = b.conjqm[k];
+    r[30 + k] = nve ? b.conjqm[k] : 0.0;
   }
   r[34] = (double) b.image;
   return n;

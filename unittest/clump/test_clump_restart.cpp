@@ -272,8 +272,9 @@ TEST_F(ClumpRestart, SplitRunEqualsTheUnsplitRun)
   const State unsplit_atoms{unsplit.atoms, {}}, control_atoms{control.atoms, {}};
   const double d = max_rel_diff(unsplit, split), dc = max_rel_diff(unsplit_atoms, control_atoms);
   if (world_rank() == 0)
-    std::printf("  %d rank(s): split vs unsplit %.3g (relative), without the stored state %.3g\n",
-                nprocs, d, dc);
+    std::printf("  %d rank(s): split vs unsplit %.3g (relative), without the stored state %.3g "
+                "(split vs the run up to the restart: %.3g)\n",
+                nprocs, d, dc, max_rel_diff(before, at_restart));
   if (nprocs == 1) {
     EXPECT_TRUE(bitwise_equal(unsplit, split)) << "largest relative difference " << d;
   } else {

@@ -103,6 +103,7 @@ template <class K> class FmmEvaluator : public Evaluator {
   void periodic_wrap(std::size_t ns, const double *&sxyz, std::size_t nt, const double *&txyz);
   void periodic_far();
   void periodic_near(bool want_pot);
+  void periodic_m2l_top(int level);    // levels 1, 2: colleague slots of one parent summed
 };
 
 template <class K> void FmmEvaluator<K>::setup_operators(double &t_setup)
@@ -232,6 +233,10 @@ template <class K> void FmmEvaluator<K>::m2l()
   std::vector<double *> ytab;
   std::vector<std::pair<int, int>> pairs[27];
   for (int l = std::max(first_level(), 1); l <= tree_.depth; ++l) {
+    if (opt_.periodic && l <= 2) {    // periodic_core.h
+      periodic_m2l_top(l);
+      continue;
+    }
     const int b0 = tree_.level_begin[l], b1 = tree_.level_begin[l + 1];
     const int p0 = tree_.level_begin[l - 1], p1 = tree_.level_begin[l];
     // source cells (children of a target parent's colleague) and target cells (V non-empty)

@@ -16,7 +16,9 @@ namespace kifmm {
 
 std::size_t PeriodicImageLists::bytes() const
 {
-  std::size_t b = V_shift.capacity();
+  std::size_t b = V_shift.capacity() + pairs.capacity() * sizeof(MutualPair) +
+      (color_off.capacity() + self_leaves.capacity()) * sizeof(int);
+  for (const TopKernel &t : top_kernels) b += t.hat.capacity() * sizeof(double);
   for (const ImageList *l : {&U, &W, &X})
     b += (l->off.capacity() + l->idx.capacity()) * sizeof(int) + l->shift.capacity();
   return b;
@@ -104,6 +106,10 @@ void build_periodic_interaction_lists(const Octree &tree, InteractionLists &list
 {
   const auto &cells = tree.cells;
   const int n = (int) cells.size();
+  images.mutual = false;
+  images.pairs.clear();
+  images.color_off.clear();
+  images.self_leaves.clear();
   lists.colleagues.assign(n, {});
   for (auto &c : lists.colleagues) c.fill(-1);
   std::vector<std::vector<Entry>> U(n), W(n), X(n), V(n), coarse_adj(n);
@@ -195,6 +201,71 @@ void build_periodic_interaction_lists(const Octree &tree, InteractionLists &list
       images.V_shift.insert(images.V_shift.end(), e.s, e.s + 3);
     }
   flatten_plain(v, lists.V);
+}
+
+bool plan_mutual_near(const Octree &tree, InteractionLists &lists, PeriodicImageLists &images)
+{
+  const auto &cells = tree.cells;
+  const int n = (int) cells.size();
+  std::vector<MutualPair> keep;
+  std::vector<int> self;
+  std::size_t entries = 0, self_entries = 0;
+  auto positive = [](const signed char s[3]) {
+    return s[0] > 0 || (s[0] == 0 && (s[1] > 0 || (s[1] == 0 && s[2] > 0)));
+  };
+  for (int li = 0; li < (int) tree.leaves.size(); ++li) {
+    const int b = tree.leaves[li];
+    if (cells[b].n_trg() == 0) continue;
+    if (cells[b].n_src() != cells[b].n_trg() || cells[b].src_begin != cells[b].trg_begin) return false;
+    self.push_back(b);
+    if (!lists.U.off.empty())
+      for (const int *a = lists.U.begin(b); a != lists.U.end(b); ++a) {
+        ++entries;
+        if (*a == b) ++self_entries;
+        else if (*a > b) keep.push_back({b, *a, {0, 0, 0}});
+      }
+    if (!images.U.off.empty())
+      for (int e = images.U.begin(b); e < images.U.end(b); ++e) {
+        ++entries;
+        const int a = images.U.idx[e];
+        const signed char *s = images.U.shift_of(e);
+        if (a > b || (a == b && positive(s))) keep.push_back({b, a, {s[0], s[1], s[2]}});
+      }
+  }
+  // every entry must have its mirror (b <- a, s) <-> (a <- b, -s); the leaf with itself once
+  if (self_entries != self.size() || entries != self_entries + 2 * keep.size()) return false;
+  // greedy edge coloring in a fixed order (deterministic): lowest color free at both leaves
+  std::vector<std::array<uint64_t, 2>> used(n, {0, 0});
+  std::vector<int> color(keep.size());
+  int ncolor = 0;
+  for (std::size_t k = 0; k < keep.size(); ++k) {
+    const auto &ua = used[keep[k].a], &ub = used[keep[k].b];
+    int c = -1;
+    for (int w = 0; w < 2 && c < 0; ++w) {
+      const uint64_t freebits = ~(ua[w] | ub[w]);
+      if (freebits) c = 64 * w + __builtin_ctzll(freebits);
+    }
+    if (c < 0) return false;
+    used[keep[k].a][c / 64] |= uint64_t(1) << (c % 64);
+    used[keep[k].b][c / 64] |= uint64_t(1) << (c % 64);
+    color[k] = c;
+    ncolor = std::max(ncolor, c + 1);
+  }
+  images.color_off.assign(ncolor + 1, 0);
+  for (int c : color) ++images.color_off[c + 1];
+  for (int c = 0; c < ncolor; ++c) images.color_off[c + 1] += images.color_off[c];
+  images.pairs.resize(keep.size());
+  std::vector<int> pos(images.color_off.begin(), images.color_off.end() - 1);
+  for (std::size_t k = 0; k < keep.size(); ++k) images.pairs[pos[color[k]]++] = keep[k];
+  images.self_leaves = std::move(self);
+  images.mutual = true;
+  // the U entries now live in the pairs: the free-space U pass finds empty lists
+  lists.U.off.assign(n + 1, 0);
+  lists.U.idx.clear();
+  images.U.off.assign(n + 1, 0);
+  images.U.idx.clear();
+  images.U.shift.clear();
+  return true;
 }
 
 void wrap_into_cell(std::size_t n, const double *xyz, const double center[3], double h, std::vector<double> &out)

@@ -25,6 +25,7 @@
 #include "octree.h"
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -40,11 +41,40 @@ struct ImageList {
   const signed char *shift_of(int e) const { return &shift[3 * (std::size_t) e]; }
 };
 
+// A pair of adjacent leaves of the near field evaluated once for both (sources = targets):
+// leaf a sees the sources of leaf b at their image + shift * L, leaf b those of a at - shift * L.
+struct MutualPair {
+  int a, b;
+  signed char shift[3];
+};
+
 struct PeriodicImageLists {
   ImageList U, W, X;      // entries with a nonzero shift (the n = 0 ones are in InteractionLists)
   std::vector<signed char> V_shift;    // shift of every entry of InteractionLists::V (tests)
+  // Mutual near field (same source and target points): every unordered pair of U-list
+  // entries once, grouped by color (pairs of one color share no leaf: they run in parallel
+  // and every target accumulates in the fixed color order, independent of the threads);
+  // the U lists are then emptied (the free-space U pass skips them). See periodic_core.h.
+  bool mutual = false;
+  std::vector<MutualPair> pairs;       // by color
+  std::vector<int> color_off;          // pairs of color c: [color_off[c], color_off[c+1])
+  std::vector<int> self_leaves;        // leaves with targets (each its own pairs, one round)
+  // M2L kernels of the levels 1 and 2 summed over the colleague slots of one source parent
+  // (periodic_m2l_top), per operator set and slot mask; kept across evaluations (p <= 10)
+  struct TopKernel {
+    std::shared_ptr<const void> ops;    // keeps the operator set (the key) alive
+    uint32_t mask = 0;
+    std::vector<double> hat;            // [block][source child * 8 + target child][32]
+  };
+  std::vector<TopKernel> top_kernels;
   std::size_t bytes() const;
 };
+
+// Mutual plan from the periodic lists (U plain entries in `lists`, image ones in `images`):
+// returns false (and changes nothing) when the U relation is not symmetric or more than 128
+// colors would be needed; otherwise fills images.pairs/color_off/self_leaves and empties
+// lists.U. Only for trees whose sources and targets are the same points.
+bool plan_mutual_near(const Octree &tree, InteractionLists &lists, PeriodicImageLists &images);
 
 // Periodic lists of a tree whose root is the periodic cell (see above).
 void build_periodic_interaction_lists(const Octree &tree, InteractionLists &lists,

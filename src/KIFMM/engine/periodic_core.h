@@ -7,8 +7,11 @@
 #pragma once
 
 #include "fmm_core.h"
+#include "p2p_mutual.h"
 #include "periodic.h"
 
+#include <algorithm>
+#include <cstdint>
 #include <stdexcept>
 #include <type_traits>
 
@@ -42,6 +45,10 @@ template <class K> void FmmEvaluator<K>::periodic_far()
   const auto &cells = tree_.cells;
   const double L = 2.0 * tree_.root.half_width;
   const int n = (int) cells.size();
+  // sources and targets are the same points (same order, same coordinates): the near field
+  // (U lists, images included) is evaluated pair by pair for both leaves (periodic_near)
+  if (sx_.size() == tx_.size() && tree_.src_order == tree_.trg_order && sx_ == tx_ && sy_ == ty_ && sz_ == tz_)
+    plan_mutual_near(tree_, lists_, plists_);
   // X entries with an image shift: P2L onto the target's check surface moved by -shift * L
 #pragma omp parallel
   {
@@ -112,11 +119,231 @@ template <class K> void FmmEvaluator<K>::periodic_far()
   }
 }
 
+// M2L of the periodic levels 1 and 2, whose parents (1 and 2 per side) are their own
+// colleagues' images: the colleague slots of a parent that hold the same source parent (with
+// different shifts) are summed into one kernel per (source child, target child) in frequency
+// space, so every (target parent, source parent) pair is multiplied once instead of once per
+// slot (level 2: 56 parent pairs instead of 208; level 1: 1 instead of 26). Sources, targets,
+// transforms and the order of accumulation per target are otherwise those of m2l().
+template <class K> void FmmEvaluator<K>::periodic_m2l_top(int l)
+{
+  const auto &cells = tree_.cells;
+  const int nf = fft_->nfreq();
+  std::vector<double> &xhat = xhat_, &yhat = yhat_;
+  const int b0 = tree_.level_begin[l], b1 = tree_.level_begin[l + 1];
+  const int p0 = tree_.level_begin[l - 1], p1 = tree_.level_begin[l];
+  std::vector<int> src_slot(b1 - b0, -1), trg_slot(b1 - b0, -1), sources, targets;
+  for (int b = b0; b < b1; ++b) {
+    if (lists_.V.size(b) == 0) continue;
+    trg_slot[b - b0] = (int) targets.size();
+    targets.push_back(b);
+    for (const int *a = lists_.V.begin(b); a != lists_.V.end(b); ++a)
+      if (src_slot[*a - b0] < 0) {
+        src_slot[*a - b0] = 0;
+        sources.push_back(*a);
+      }
+  }
+  if (targets.empty()) return;
+  std::sort(sources.begin(), sources.end());
+  for (std::size_t i = 0; i < sources.size(); ++i) src_slot[sources[i] - b0] = (int) i;
+  const int nsrc = (int) sources.size(), ntrg = (int) targets.size();
+  const std::size_t xstride = (std::size_t) nsrc * 32, ystride = (std::size_t) ntrg * 32;
+  xhat.resize((std::size_t) nsrc * 2 * nf);
+  yhat.assign((std::size_t) ntrg * 2 * nf, 0.0);
+  std::vector<const double *> xtab((std::size_t) (p1 - p0) * 8, nullptr);
+  std::vector<double *> ytab((std::size_t) (p1 - p0) * 8, nullptr);
+  for (int c = b0; c < b1; ++c) {
+    const int par = cells[c].parent - p0;
+    int oct = 0;
+    while (cells[cells[c].parent].child[oct] != c) ++oct;
+    if (src_slot[c - b0] >= 0) xtab[(std::size_t) par * 8 + oct] = &xhat[(std::size_t) src_slot[c - b0] * 32];
+    if (trg_slot[c - b0] >= 0) ytab[(std::size_t) par * 8 + oct] = &yhat[(std::size_t) trg_slot[c - b0] * 32];
+  }
+  // groups: the set of slots (bit mask) at which a target parent sees one source parent
+  std::vector<uint32_t> group_mask;
+  std::vector<std::vector<std::pair<int, int>>> group_pairs;
+  for (int pc = p0; pc < p1; ++pc) {
+    bool has_trg = false;
+    for (int o = 0; o < 8; ++o) has_trg = has_trg || ytab[(std::size_t) (pc - p0) * 8 + o];
+    if (!has_trg) continue;
+    const auto &col = lists_.colleagues[pc];
+    std::vector<std::pair<int, uint32_t>> by_src;    // source parent -> slots
+    for (int sl = 0; sl < 27; ++sl) {
+      const int cc = col[sl];
+      if (sl == 13 || cc < 0 || cells[cc].leaf()) continue;
+      bool has_src = false;
+      for (int o = 0; o < 8; ++o) has_src = has_src || xtab[(std::size_t) (cc - p0) * 8 + o];
+      if (!has_src) continue;
+      auto it = std::find_if(by_src.begin(), by_src.end(), [&](const auto &e) { return e.first == cc; });
+      if (it == by_src.end()) by_src.emplace_back(cc, uint32_t(1) << sl);
+      else it->second |= uint32_t(1) << sl;
+    }
+    for (const auto &[cc, mask] : by_src) {
+      std::size_t g = 0;
+      while (g < group_mask.size() && group_mask[g] != mask) ++g;
+      if (g == group_mask.size()) {
+        group_mask.push_back(mask);
+        group_pairs.emplace_back();
+      }
+      group_pairs[g].emplace_back(pc - p0, cc - p0);
+    }
+  }
+  // kernel indices of every (group, source child, target child): the slots of the group
+  const int ngroup = (int) group_mask.size();
+  std::vector<std::vector<int>> kid((std::size_t) ngroup * 64);
+  for (int g = 0; g < ngroup; ++g)
+    for (int sl = 0; sl < 27; ++sl) {
+      if (!(group_mask[g] >> sl & 1)) continue;
+      const int o[3] = {sl / 9 - 1, (sl / 3) % 3 - 1, sl % 3 - 1};
+      for (int sc = 0; sc < 8; ++sc)
+        for (int tc = 0; tc < 8; ++tc) {
+          int d[3];
+          for (int a = 0; a < 3; ++a) d[a] = ((tc >> a) & 1) - 2 * o[a] - ((sc >> a) & 1);
+          const int id = m2l_offset_index(d[0], d[1], d[2]);
+          if (id >= 0) kid[(std::size_t) g * 64 + sc * 8 + tc].push_back(id);
+        }
+    }
+  std::vector<char> nonzero(kid.size());
+  for (std::size_t q = 0; q < kid.size(); ++q) nonzero[q] = !kid[q].empty();
+#pragma omp parallel if (nsrc > 4)
+  {
+    M2LTransform::Workspace ws(*fft_);
+#pragma omp for schedule(dynamic, 8)
+    for (int i = 0; i < nsrc; ++i) fft_->forward(up(sources[i]), &xhat[(std::size_t) i * 32], xstride, ws);
+  }
+  const double *kern = ops_[l]->m2l_hat.data();
+  const int nblocks = nf / 16;
+  // summed kernel chunk (block, group, source child, target child) into k[32]
+  auto sum_kernels = [&](int blk, int g, int st, double *k) {
+    const std::vector<int> &ids = kid[(std::size_t) g * 64 + st];
+    const double *kb = kern + (std::size_t) blk * kM2LKernels * 32;
+    if (ids.empty()) {
+      std::fill(k, k + 32, 0.0);
+      return;
+    }
+    const double *first = kb + (std::size_t) ids[0] * 32;
+    for (int f = 0; f < 32; ++f) k[f] = first[f];
+    for (std::size_t q = 1; q < ids.size(); ++q) {
+      const double *src = kb + (std::size_t) ids[q] * 32;
+#pragma omp simd
+      for (int f = 0; f < 32; ++f) k[f] += src[f];
+    }
+  };
+  // cached sums (orders <= 10: at most 8 masks x 64 x nfreq complex, 36 MB at p = 10)
+  std::vector<const double *> cached(ngroup, nullptr);
+  if (p_ <= 10) {
+    auto &cache = plists_.top_kernels;
+    if (cache.size() > 16) cache.clear();
+    for (int g = 0; g < ngroup; ++g) {
+      std::size_t e = 0;
+      while (e < cache.size() && !(cache[e].ops.get() == ops_[l].get() && cache[e].mask == group_mask[g])) ++e;
+      if (e == cache.size()) {
+        PeriodicImageLists::TopKernel t;
+        t.ops = ops_[l];
+        t.mask = group_mask[g];
+        t.hat.resize((std::size_t) nblocks * 64 * 32);
+#pragma omp parallel for schedule(static)
+        for (int blk = 0; blk < nblocks; ++blk)
+          for (int st = 0; st < 64; ++st) sum_kernels(blk, g, st, &t.hat[((std::size_t) blk * 64 + st) * 32]);
+        cache.push_back(std::move(t));
+      }
+      cached[g] = cache[e].hat.data();
+    }
+  }
+#pragma omp parallel
+  {
+    std::vector<double> kc(64 * 32);
+#pragma omp for schedule(dynamic, 1)
+    for (int blk = 0; blk < nblocks; ++blk) {
+      const std::size_t xo = blk * xstride, yo = blk * ystride;
+      for (int g = 0; g < ngroup; ++g) {
+        const double *kg;
+        if (cached[g]) {
+          kg = cached[g] + (std::size_t) blk * 64 * 32;
+        } else {
+          for (int st = 0; st < 64; ++st) sum_kernels(blk, g, st, &kc[(std::size_t) st * 32]);
+          kg = kc.data();
+        }
+        for (const auto &pr : group_pairs[g]) {
+          double *const *y = ytab.data() + 8 * (std::size_t) pr.first;
+          const double *const *x = xtab.data() + 8 * (std::size_t) pr.second;
+          for (int tc = 0; tc < 8; ++tc) {
+            if (!y[tc]) continue;
+            double *yr = y[tc] + yo, *yi = yr + 16;
+            alignas(64) double ar[16], ai[16];    // accumulated over the source children
+            for (int f = 0; f < 16; ++f) {
+              ar[f] = yr[f];
+              ai[f] = yi[f];
+            }
+            for (int sc = 0; sc < 8; ++sc) {
+              if (!x[sc] || !nonzero[(std::size_t) g * 64 + sc * 8 + tc]) continue;
+              const double *kr = kg + (std::size_t) (sc * 8 + tc) * 32, *ki = kr + 16;
+              const double *xr = x[sc] + xo, *xi = xr + 16;
+#pragma omp simd aligned(ar, ai : 64)
+              for (int f = 0; f < 16; ++f) {
+                ar[f] += kr[f] * xr[f] - ki[f] * xi[f];
+                ai[f] += kr[f] * xi[f] + ki[f] * xr[f];
+              }
+            }
+            for (int f = 0; f < 16; ++f) {
+              yr[f] = ar[f];
+              yi[f] = ai[f];
+            }
+          }
+        }
+      }
+    }
+  }
+  const double s = scale_[l];
+#pragma omp parallel if (ntrg > 4)
+  {
+    M2LTransform::Workspace ws(*fft_);
+#pragma omp for schedule(dynamic, 8)
+    for (int i = 0; i < ntrg; ++i) {
+      fft_->inverse_add(&yhat[(std::size_t) i * 32], ystride, dcheck(targets[i]), s, ws);
+      has_local_[targets[i]] = 1;
+    }
+  }
+}
+
 template <class K> void FmmEvaluator<K>::periodic_near(bool want_pot)
 {
   const auto &cells = tree_.cells;
   const double L = 2.0 * tree_.root.half_width;
   const int nleaf = (int) tree_.leaves.size();
+  const double t_begin = omp_get_wtime();
+  if (plists_.mutual) {
+    // each leaf with itself (pairs j > i), then the pairs of adjacent leaves color by color
+    std::size_t zeros = 0;
+    const auto &self = plists_.self_leaves;
+    const double no_shift[3] = {0, 0, 0};
+    auto run = [&](int a, int b, const double *sh, bool self_pair) -> std::size_t {
+      const Cell &A = cells[a], &B = cells[b];
+      const std::size_t i0 = A.src_begin, j0 = B.src_begin;
+      std::size_t z = 0;
+      if (want_pot)
+        p2p_mutual<K, true>(k_, self_pair, A.n_src(), &sx_[i0], &sy_[i0], &sz_[i0], &sq_[i0], &tp_[i0], &tgx_[i0],
+                            &tgy_[i0], &tgz_[i0], B.n_src(), &sx_[j0], &sy_[j0], &sz_[j0], &sq_[j0], &tp_[j0],
+                            &tgx_[j0], &tgy_[j0], &tgz_[j0], sh, &z);
+      else
+        p2p_mutual<K, false>(k_, self_pair, A.n_src(), &sx_[i0], &sy_[i0], &sz_[i0], &sq_[i0], &tp_[i0],
+                             &tgx_[i0], &tgy_[i0], &tgz_[i0], B.n_src(), &sx_[j0], &sy_[j0], &sz_[j0], &sq_[j0],
+                             &tp_[j0], &tgx_[j0], &tgy_[j0], &tgz_[j0], sh, &z);
+      return z;
+    };
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : zeros)
+    for (int i = 0; i < (int) self.size(); ++i) zeros += run(self[i], self[i], no_shift, true);
+    for (int c = 0; c + 1 < (int) plists_.color_off.size(); ++c) {
+      const int e0 = plists_.color_off[c], e1 = plists_.color_off[c + 1];
+#pragma omp parallel for schedule(dynamic, 2) reduction(+ : zeros) if (e1 - e0 > 8)
+      for (int e = e0; e < e1; ++e) {
+        const MutualPair &pr = plists_.pairs[e];
+        const double sh[3] = {pr.shift[0] * L, pr.shift[1] * L, pr.shift[2] * L};
+        zeros += run(pr.a, pr.b, sh, false);
+      }
+    }
+    stats_.coincident_pairs += zeros;
+  }
 #pragma omp parallel
   {
     SurfacePoints surf;
@@ -166,6 +393,7 @@ template <class K> void FmmEvaluator<K>::periodic_near(bool want_pot)
         }
     }
   }
+  stats_.t_p2p += omp_get_wtime() - t_begin;    // near field of the images (and mutual U)
   if (periodic_quad_ != 0.0) {
     // a sum_j q_j |x - y_j|^2 = a (Q |x-c|^2 - 2 (x-c).D + S2); gradient 2a (Q (x-c) - D)
     const double a = periodic_quad_, *m = periodic_moments_, *c = tree_.root.center;

@@ -380,7 +380,7 @@ def make_plots(recs, outdir, cases, profile):
 # ----------------------------------------------------------------------------- tables
 
 def settings_table(recs):
-    runs = [r for r in recs if r.get("kind") in ("run", "setup", "reference")]
+    runs = [r for r in recs if r.get("kind") == "run" and r.get("status") != "skipped"]
     if not runs:
         return "(no results)\n"
     dates = sorted(r["date"] for r in runs if r.get("date"))
@@ -388,11 +388,19 @@ def settings_table(recs):
     threads = sorted({str(r.get("omp_threads", r.get("omp_threads_env"))) for r in runs})
     cpus = sorted({str(r.get("host_cpus")) for r in runs})
     commits = sorted({str(r.get("commit") or "?") for r in runs})
+    ref_commits = sorted({str(r.get("commit") or "?") for r in recs
+                          if r.get("kind") in ("reference", "setup")})
     nok = sum(1 for r in runs if r.get("kind") == "run" and r.get("status") == "ok")
     nfail = sum(1 for r in runs if r.get("kind") == "run" and r.get("status") != "ok")
     lines = ["| setting | value |", "|---|---|",
              f"| measured | {dates[0]} to {dates[-1]} |" if dates else "| measured | - |",
-             f"| source commit of bench_solvers | {', '.join(commits)} |",
+             f"| source commit of bench_solvers (solver runs) | {', '.join(commits)} (src/ of both "
+             "is the same; `+dirty`: another engineer's uncommitted timer in "
+             "src/KIFMM/engine/fmm_core.h, two clock reads per periodic evaluation for the "
+             "engine's statistics). Later engine commits (d46a79d distributed evaluation, "
+             "42b1b4a, 8f0ba3c periodic near field and M2L cost) are **not** measured here |",
+             f"| source commit of the references and the operator setup table | "
+             f"{', '.join(ref_commits)} |",
              f"| OMP_NUM_THREADS (kifmm engine, direct sum) | {', '.join(threads)} |",
              "| MPI ranks | 1 (LAMMPS styles msm, coul/msm, coul/cut are serial) |",
              f"| host CPUs (shared with other work) | {', '.join(cpus)} |",

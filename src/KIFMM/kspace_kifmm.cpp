@@ -44,6 +44,7 @@ KSpaceKIFMM::KSpaceKIFMM(LAMMPS *lmp) : KSpace(lmp)
   // the full long-range sum: no real-space split, no g_ewald for pair styles
   ewaldflag = pppmflag = msmflag = dispersionflag = tip4pflag = dipoleflag = spinflag = 0;
   triclinic_support = 0;
+  scalar_pressure_flag = -1;    // 'kspace_modify pressure/scalar' not given (periodic_init)
 }
 
 KSpaceKIFMM::~KSpaceKIFMM()

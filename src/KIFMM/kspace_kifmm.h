@@ -72,6 +72,7 @@ class KSpaceKIFMM : public KSpace {
   // periodic boundaries (kspace_kifmm_periodic.cpp)
   bool periodic = false;
   bool warned_periodic_virial = false;
+  int scalar_pressure_written = -1, scalar_pressure_user = -1;    // pressure/scalar (periodic_init)
   void periodic_init();
   void periodic_cell();
   void periodic_virial(double e_local);

@@ -32,8 +32,14 @@ const char *boundary_name(int code)
 
 void KSpaceKIFMM::periodic_init()
 {
+  // 'kspace_modify pressure/scalar yes/no' (KSpace's keyword, made for msm): the constructor
+  // leaves -1; a value other than the one written here last is the user's
+  if (scalar_pressure_flag != scalar_pressure_written) scalar_pressure_user = scalar_pressure_flag;
   periodic = domain->xperiodic || domain->yperiodic || domain->zperiodic;
-  if (!periodic) return;
+  if (!periodic) {    // open boundaries: the full virial tensor is computed
+    scalar_pressure_flag = scalar_pressure_written = 0;
+    return;
+  }
   if (!(domain->xperiodic && domain->yperiodic && domain->zperiodic))
     error->all(FLERR,
                "kspace_style kifmm: periodic boundaries are not supported yet for mixed "
@@ -46,6 +52,15 @@ void KSpaceKIFMM::periodic_init()
                "density is not zero); use 'kspace_modify kifmm jeans yes' to subtract it "
                "(uniform negative background, Jeans swindle)");
   periodic_cell();
+  // only the trace of the periodic virial is computed (periodic_virial): LAMMPS's flag for
+  // scalar-only kspace pressures makes compute pressure refuse tensor components (thermo pxx,
+  // fix npt/nph aniso or tri, fix box/relax aniso, ...) instead of using wrong ones
+  if (scalar_pressure_user == 0)
+    error->all(FLERR,
+               "kspace_style kifmm: 'kspace_modify pressure/scalar no' is not available with "
+               "periodic boundaries: only the trace of the periodic virial (the scalar pressure) "
+               "is computed, not its tensor components");
+  scalar_pressure_flag = scalar_pressure_written = 1;
   // net charge: like ewald/pppm, a uniform neutralizing background (energy included)
   if (kset.kernel == LongRangeKernel::Coulomb && std::fabs(qsum) > 1.0e-5 && comm->me == 0)
     error->warning(FLERR,
@@ -76,7 +91,8 @@ void KSpaceKIFMM::periodic_cell()
 // Global virial of the periodic system. Coulomb and gravity are homogeneous of degree -1 in all
 // lengths (positions and cell; the tin-foil sum and the background term included), so the trace
 // of the virial equals the energy: W_xx = W_yy = W_zz = U/3 gives the exact scalar pressure.
-// The anisotropic part is not computed (off-diagonal 0). Yukawa: not computed (0, warning).
+// The anisotropic part is not computed: scalar_pressure_flag = 1 (periodic_init) makes LAMMPS's
+// compute pressure stop when tensor components are asked for. Yukawa: not computed (0, warning).
 void KSpaceKIFMM::periodic_virial(double e_local)
 {
   for (int k = 0; k < 6; ++k) virial[k] = 0.0;

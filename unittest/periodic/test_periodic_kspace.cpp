@@ -342,6 +342,16 @@ TEST_F(Periodic, NonCubicBoxIsAnErrorNamingTheLengths)
   EXPECT_LAMMPS_ERROR(command("run 0"), "cubic box; the box lengths are 1 1.25 1");
 }
 
+TEST_F(Periodic, BoxTurningNonCubicDuringARunIsAnError)
+{
+  // the cell is checked at every evaluation: fix deform of x alone (box changed at the end
+  // of step 1) stops the run at step 2
+  load(uniform_cube(50, 60));
+  commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4\n"
+           "fix d all deform 1 x final 0 1.5 remap x");
+  EXPECT_LAMMPS_ERROR(command("run 10"), "cubic box; the box lengths are 1.05 1 1 \\(step 2\\)");
+}
+
 TEST_F(Periodic, TriclinicIsAnError)
 {
   load(uniform_cube(50, 53));
@@ -354,6 +364,41 @@ TEST_F(Periodic, MixedPeriodicityIsAnError)
   load(uniform_cube(50, 54), "p p f");
   commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4");
   EXPECT_LAMMPS_ERROR(command("run 0"), "mixed periodicity \\(boundary p p f\\)");
+}
+
+// Only the trace of the periodic virial is computed: the scalar pressure is exact (tested with
+// ewald above), tensor components stop in compute pressure instead of being wrong.
+TEST_F(Periodic, PressureTensorComponentsAreAnError)
+{
+  load(uniform_cube(50, 56));
+  commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4\nthermo_style custom step press pxx");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "pressure/scalar no' for tensor components");
+}
+
+TEST_F(Periodic, FixNptAnisoIsAnErrorAndIsoRuns)
+{
+  load(uniform_cube(50, 57));
+  commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4\nvelocity all create 1.0 5\n"
+           "fix 1 all npt temp 1 1 0.1 iso 1 1 1\nrun 2 post no\nunfix 1\n"
+           "fix 1 all npt temp 1 1 0.1 aniso 1 1 1");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "pressure/scalar no' for tensor components");
+}
+
+TEST_F(Periodic, PressureScalarNoIsAnError)
+{
+  load(uniform_cube(50, 58));
+  commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4\nkspace_modify pressure/scalar no");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "kspace_modify pressure/scalar no' is not available with periodic");
+}
+
+TEST_F(Periodic, OpenBoundariesKeepTheTensor)
+{
+  // the flag is only set for periodic boxes: open boundaries report pxx (exact tensor)
+  load(uniform_cube(50, 59), "f f f");
+  commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-6\nthermo_style custom step pxx pyy pzz\n"
+           "run 0 post no");
+  EXPECT_NE(thermo("pxx"), 0.0);
+  EXPECT_EQ(lmp->force->kspace->scalar_pressure_flag, 0);
 }
 
 TEST_F(Periodic, PerAtomVirialIsAnError)

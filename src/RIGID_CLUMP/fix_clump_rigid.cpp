@@ -131,6 +131,7 @@ FixClumpRigid::FixClumpRigid(LAMMPS *lmp, int narg, char **arg) : Fix(lmp, narg,
     } else if (key == "gravity") {
       need(1);
       extra_args += fmt::format(" gravity {}", arg[iarg + 1]);
+      grav_id = arg[iarg + 1];
       iarg += 2;
     } else
       error->all(FLERR, "Illegal fix clump/rigid command: unknown keyword {}", key);
@@ -220,7 +221,10 @@ FixClumpRigid::~FixClumpRigid()
 
 int FixClumpRigid::setmask()
 {
-  return 0;    // all integration is done by the internal rigid fix
+  // all integration is done by the internal rigid fix; initial_integrate (before the rigid
+  // fix's, this fix comes first) only completes the rigid fix's set-up: the gravity force of
+  // the clumps, rigid/nve/small's conjqm
+  return (integrator == "rigid/nve/small" || !grav_id.empty()) ? FixConst::INITIAL_INTEGRATE : 0;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -645,17 +649,25 @@ RigidSmallLayout *FixClumpRigid::rigid_layout(std::string &why)
 {
   Fix *r = rigid_fix();
   auto *v = reinterpret_cast<RigidSmallLayout *>(r);
+  // (the object is larger than the declared part: these reads stay inside it)
+  const char *mismatch = "the FixRigidSmall class of this LAMMPS does not match the layout the "
+                         "package was built for";
+  if (!(v->me == comm->me && v->nprocs == comm->nprocs && v->inpfile &&
+        bodies_file == v->inpfile && (v->maxmol == maxmol || (maxmol == 0 && v->maxmol == -1)) &&
+        v->reinitflag == 0 &&
+        (v->setupflag == 0 || v->setupflag == 1) &&
+        v->bodysize == (int) (sizeof(RigidSmallLayout::Body) / sizeof(double)))) {
+    why = mismatch;
+    return nullptr;
+  }
   int dim = 0;
-  void *a2b = r->extract("body", dim);
-  void *mb = r->extract("masstotal", dim);    // owned+ghost body masses, refreshed
-  if (!a2b || !mb) {
+  void *a2b = r->extract("body", dim);    // nullptr before the set-up (or with no atoms)
+  if (!v->setupflag) {
     why = "its bodies are not set up";
     return nullptr;
   }
-  bool ok = v->me == comm->me && v->nprocs == comm->nprocs && v->inpfile &&
-      bodies_file == v->inpfile && v->maxmol == maxmol && v->setupflag == 1 &&
-      v->reinitflag == 0 && (void *) v->atom2body == a2b && (void *) v->mass_body == mb &&
-      v->bodysize == (int) (sizeof(RigidSmallLayout::Body) / sizeof(double)) &&
+  void *mb = r->extract("masstotal", dim);    // owned+ghost body masses, refreshed
+  bool ok = (void *) v->atom2body == a2b && (void *) v->mass_body == mb &&
       v->nlocal_body >= 0 && v->nghost_body >= 0 &&
       v->nlocal_body + v->nghost_body <= v->nmax_body;
   if (ok)
@@ -663,8 +675,7 @@ RigidSmallLayout *FixClumpRigid::rigid_layout(std::string &why)
       ok = v->body[b].ilocal >= 0 && v->body[b].ilocal < atom->nlocal + atom->nghost &&
           v->body[b].mass == static_cast<double *>(mb)[b];
   if (!ok) {
-    why = "the FixRigidSmall class of this LAMMPS does not match the layout the package was "
-          "built for";
+    why = mismatch;
     return nullptr;
   }
   return v;
@@ -725,6 +736,54 @@ void FixClumpRigid::setup(int)
     restore_pending = false;
     restore_state();
   }
+  // rigid/nve/small's setup() (after this one) recomputes conjqm from angmom: keep the
+  // integrated (or restored) values and put them back before its first initial_integrate
+  gravity_pending = !grav_id.empty();
+  conjqm_hold.clear();
+  if (integrator == "rigid/nve/small" && conjqm_valid) {
+    std::string why;
+    if (RigidSmallLayout *v = rigid_layout(why))
+      for (int b = 0; b < v->nlocal_body; ++b)
+        conjqm_hold.push_back({v->body[b].conjqm[0], v->body[b].conjqm[1],
+                               v->body[b].conjqm[2], v->body[b].conjqm[3]});
+  }
+}
+
+void FixClumpRigid::initial_integrate(int)
+{
+  if (gravity_pending) {
+    gravity_pending = false;
+    // rigid/small's setup() summed the pebble forces into fcm without the clump weight that
+    // its final_integrate adds (fcm += g M): add it, so that a run split into two runs (or by
+    // a restart) equals the unsplit run
+    int ig = modify->find_fix(grav_id), dim = 0;
+    auto *g = ig >= 0 ? static_cast<double *>(modify->fix[ig]->extract("gvec", dim)) : nullptr;
+    std::string why;
+    RigidSmallLayout *v = g ? rigid_layout(why) : nullptr;
+    if (v) {
+      for (int b = 0; b < v->nlocal_body; ++b) {
+        RigidSmallLayout::Body &body = v->body[b];
+        body.fcm[0] += g[0] * body.mass;
+        body.fcm[1] += g[1] * body.mass;
+        body.fcm[2] += g[2] * body.mass;
+      }
+    } else if (comm->me == 0 && !restart_warned) {
+      restart_warned = true;
+      error->warning(FLERR,
+                     "Fix clump/rigid {}: cannot add the clump weight to the first half-step "
+                     "of the run ({}): the clumps lag by g dt/2",
+                     id, g ? why : std::string("no gravity vector"));
+    }
+  }
+  if (!conjqm_hold.empty()) {
+    std::string why;
+    RigidSmallLayout *v = rigid_layout(why);
+    if (v && v->nlocal_body == (int) conjqm_hold.size())
+      for (int b = 0; b < v->nlocal_body; ++b)
+        for (int k = 0; k < 4; ++k) v->body[b].conjqm[k] = conjqm_hold[b][k];
+    conjqm_hold.clear();
+  }
+  conjqm_valid = true;
 }
 
 void FixClumpRigid::restore_state()
@@ -781,6 +840,7 @@ void FixClumpRigid::restore_state()
   int counts[2] = {nset, missing}, all[2];
   MPI_Allreduce(counts, all, 2, MPI_INT, MPI_SUM, world);
   restored.clear();
+  conjqm_valid = true;    // restored (rigid/nve/small)
   if (comm->me == 0) {
     if (all[1] > 0)
       error->warning(FLERR,

@@ -19,6 +19,7 @@
 
 #include "fix.h"
 
+#include <array>
 #include <map>
 #include <string>
 #include <vector>
@@ -36,6 +37,7 @@ class FixClumpRigid : public Fix {
   void *extract(const char *, int &) override;
   void set_molecule(int, tagint, int, double *, double *, double *) override;
   void setup(int) override;
+  void initial_integrate(int) override;
 
   // restart files: global settings, per-atom body-frame offsets and (on the atom that owns
   // its clump in rigid/small) the clump state
@@ -83,6 +85,14 @@ class FixClumpRigid : public Fix {
   bool restore_pending = false;      // put the state back at the next setup
   bool write_exact = false;          // the restart being written has the clump state
   bool restart_warned = false;
+  // rigid/nve/small recomputes its conjugate quaternion momenta from the angular momenta at
+  // every run set-up (a roundoff-level change); they are kept across runs and restarts
+  bool conjqm_valid = false;
+  std::vector<std::array<double, 4>> conjqm_hold;
+  // rigid/small's setup() leaves the gravity keyword's force out of the clump forces it
+  // computes: it is added before the first step of each run (as final_integrate would have)
+  std::string grav_id;
+  bool gravity_pending = false;
 
   Fix *rigid_fix();
   class RigidSmallLayout *rigid_layout(std::string &why);

@@ -5,6 +5,8 @@
 //    not on a multiple of 5: the held forces come from the restart file), granular contacts
 //    with a wall, an electric field; mass properties, positions, orientations and motion of
 //    the clumps and every pebble's position and velocity are compared;
+//    Also with integrator nve (rigid/nve/small: its conjqm is kept across the set-up) and with
+//    the gravity keyword (the clump weight is in the first half-step of the restarted run).
 //  - control: re-specifying the fix under another ID (the stored state is not used) gives a
 //    different run, so the comparison can fail;
 //  - a changed density after read_restart: warning, stored state not used;
@@ -84,13 +86,15 @@ const char *const FORCES = R"(
 neigh_modify every 1 delay 0 check no
 fix wall all wall/gran hooke 200.0 NULL 30.0 NULL 0.5 1 zplane -0.05 NULL
 fix ef all efield 2.0e-3 0.0 -1.0e-3
+fix grav nothing gravity 9.81 vector 0 0 -1
 dielectric 1.0e13
 kspace_style kifmm 1e-6
 fix st all kifmm/stride 5
 thermo_style custom step
 )";
 
-std::string system_script(const std::string &dimer_file, const std::string &asym_file)
+std::string system_script(const std::string &dimer_file, const std::string &asym_file,
+                          const std::string &fix_args = "density 2500")
 {
   std::ostringstream s;
   s << R"(
@@ -99,12 +103,13 @@ atom_style hybrid sphere charge
 atom_modify map array sort 0 0.0
 boundary f f f
 fix prop all property/atom mol ghost yes
-region box block -0.2 0.2 -0.05 0.05 -0.05 0.05
+region box block -0.2 0.2 -0.1 0.1 -0.1 0.1
 create_box 2 box
 mass * 1.0
 comm_modify cutoff 0.04 vel yes
 neighbor 0.002 bin
 timestep 1e-4
+group nothing empty
 )";
   s << "molecule dim " << dimer_file << "\nmolecule asym " << asym_file << "\nmolecule dip "
     << potentials << "/dipole3.mol\n";
@@ -125,7 +130,7 @@ variable vx atom 0.3*sin(40*x)+0.1*cos(60*y)
 variable vy atom 0.05*cos(30*x)
 velocity all set v_vx v_vy -1.0
 )";
-  s << FORCES << "fix c all clump/rigid density 2500\n";
+  s << FORCES << "fix c all clump/rigid " << fix_args << "\n";
   return s.str();
 }
 
@@ -221,10 +226,15 @@ class ClumpRestart : public ::testing::Test {
   }
 };
 
-TEST_F(ClumpRestart, SplitRunEqualsTheUnsplitRun)
+class ClumpRestartSplit : public ClumpRestart,
+                          public ::testing::WithParamInterface<const char *> {};
+
+TEST_P(ClumpRestartSplit, SplitRunEqualsTheUnsplitRun)
 {
   const int nprocs = world_size();
   const std::string file = shared_name("split.restart");
+  const std::string fix_args = GetParam();
+  script = system_script(dimer_file, asym_file, fix_args);
 
   LAMMPS *lmp = make_lammps(MPI_COMM_WORLD);
   run_script(lmp, script + "run 150 post no");
@@ -238,7 +248,7 @@ TEST_F(ClumpRestart, SplitRunEqualsTheUnsplitRun)
 
   // mass properties and state survive the restart file (checked after run 0)
   lmp = make_lammps(MPI_COMM_WORLD);
-  run_script(lmp, restarted(file, "fix c all clump/rigid density 2500") + "run 0 post no");
+  run_script(lmp, restarted(file, "fix c all clump/rigid " + fix_args) + "run 0 post no");
   const State at_restart = state_of(lmp);
   delete lmp;
   ASSERT_EQ(at_restart.clumps.size(), 8u);
@@ -252,13 +262,13 @@ TEST_F(ClumpRestart, SplitRunEqualsTheUnsplitRun)
   }
 
   lmp = make_lammps(MPI_COMM_WORLD);
-  run_script(lmp, restarted(file, "fix c all clump/rigid density 2500") + "run 83 post no");
+  run_script(lmp, restarted(file, "fix c all clump/rigid " + fix_args) + "run 83 post no");
   const State split = state_of(lmp);
   delete lmp;
 
   // control: the fix under another ID does not take the stored state
   lmp = make_lammps(MPI_COMM_WORLD);
-  run_script(lmp, restarted(file, "fix c2 all clump/rigid density 2500") + "run 83 post no");
+  run_script(lmp, restarted(file, "fix c2 all clump/rigid " + fix_args) + "run 83 post no");
   const State control = state_of(lmp, "c2");
   delete lmp;
 
@@ -272,9 +282,9 @@ TEST_F(ClumpRestart, SplitRunEqualsTheUnsplitRun)
   const State unsplit_atoms{unsplit.atoms, {}}, control_atoms{control.atoms, {}};
   const double d = max_rel_diff(unsplit, split), dc = max_rel_diff(unsplit_atoms, control_atoms);
   if (world_rank() == 0)
-    std::printf("  %d rank(s): split vs unsplit %.3g (relative), without the stored state %.3g "
+    std::printf("  %s, %d rank(s): split vs unsplit %.3g (relative), without the stored state %.3g "
                 "(split vs the run up to the restart: %.3g)\n",
-                nprocs, d, dc, max_rel_diff(before, at_restart));
+                fix_args.c_str(), nprocs, d, dc, max_rel_diff(before, at_restart));
   if (nprocs == 1) {
     EXPECT_TRUE(bitwise_equal(unsplit, split)) << "largest relative difference " << d;
   } else {
@@ -282,6 +292,10 @@ TEST_F(ClumpRestart, SplitRunEqualsTheUnsplitRun)
   }
   EXPECT_GT(dc, 1e-13) << "without the stored state the run must differ";
 }
+
+INSTANTIATE_TEST_SUITE_P(Integrators, ClumpRestartSplit,
+                         ::testing::Values("density 2500", "density 2500 integrator nve",
+                                           "density 2500 gravity grav"));
 
 TEST_F(ClumpRestart, ChangedDensityRecomputesWithAWarning)
 {
@@ -341,6 +355,7 @@ comm_modify cutoff 0.04 vel yes
 neighbor 0.002 bin
 timestep 1e-4
 read_data )" + data + R"( fix prop NULL Molecules
+group nothing empty
 )" + FORCES + "fix c all clump/rigid density 2500\nrun 0 post no");
   const State after = state_of(lmp);
   delete lmp;

@@ -1,7 +1,6 @@
 #include "kspace_kifmm.h"
 
 #include "fix_kifmm_stride.h"
-#include "distributed.h"
 #include "mpi_communicator.h"
 #include "periodic.h"
 
@@ -181,9 +180,9 @@ void KSpaceKIFMM::init()
     mesg += fmt::format("  operator cache = {}\n",
                         engine_options.cache_dir.empty() ? "memory only" : engine_options.cache_dir);
     if (comm->nprocs > 1 && distributed())
-      mesg += fmt::format("  MPI: distributed over {} ranks (top tree level {}, ghost atoms near each "
+      mesg += fmt::format("  MPI: distributed over {} ranks (global top tree, ghost atoms near each "
                           "rank's cells; no all-gather)\n",
-                          comm->nprocs, kifmm::default_top_level(comm->nprocs));
+                          comm->nprocs);
     else if (comm->nprocs > 1)
       mesg += fmt::format("  MPI: periodic boundaries: the atoms of all {} ranks are all-gathered on "
                           "every rank (distributed evaluation is for open boundaries only)\n",

@@ -76,6 +76,16 @@ double rel(double a, double b)
   return std::fabs(a - b) / std::fabs(b);
 }
 
+double rel_l2(const std::vector<double> &a, const std::vector<double> &b)
+{
+  double num = 0, den = 0;
+  for (size_t k = 0; k < b.size(); ++k) {
+    num += (a[k] - b[k]) * (a[k] - b[k]);
+    den += b[k] * b[k];
+  }
+  return std::sqrt(num / den);
+}
+
 // ---------------------------------------------------------------- accuracy
 
 struct AccuracyCase {
@@ -479,6 +489,67 @@ TEST_F(KSpaceKifmm, BadArgumentsNameTheToken)
   EXPECT_LAMMPS_ERROR(command("kspace_modify kifmm order 40"), "order 40 is out of range");
 }
 
+// ---------------------------------------------------------------- any number of ranks
+// (run serially and under mpirun -np 2-4 by kspace.mpi_equals_serial: the distributed
+// evaluation of per-atom values, the per-atom virial and the error check)
+
+// per-atom values of all ranks by atom ID (1-based IDs 1..natoms)
+std::vector<double> per_atom_by_id(LAMMPS_NS::LAMMPS *lmp, const char *id, int cols)
+{
+  const int n = lmp->atom->nlocal, natoms = (int) lmp->atom->natoms;
+  std::vector<double> v((size_t) natoms * cols, 0.0);
+  const auto *tag = lmp->atom->tag;
+  if (cols == 1) {
+    auto *p = (double *) lammps_extract_compute(lmp, id, LMP_STYLE_ATOM, LMP_TYPE_VECTOR);
+    for (int i = 0; i < n; ++i) v[tag[i] - 1] = p[i];
+  } else {
+    auto **p = (double **) lammps_extract_compute(lmp, id, LMP_STYLE_ATOM, LMP_TYPE_ARRAY);
+    for (int i = 0; i < n; ++i)
+      for (int k = 0; k < cols; ++k) v[(size_t) (tag[i] - 1) * cols + k] = p[i][k];
+  }
+  MPI_Allreduce(MPI_IN_PLACE, v.data(), (int) v.size(), MPI_DOUBLE, MPI_SUM, lmp->world);
+  return v;
+}
+
+TEST_F(KSpaceKifmm, MpiDistributedPerAtomValuesEqualPairCoulCut)
+{
+  Configuration c = two_clusters(600, 9);
+  Configuration u = uniform_cube(900, 10);
+  c.x.insert(c.x.end(), u.x.begin(), u.x.end());
+  c.q.insert(c.q.end(), u.q.begin(), u.q.end());
+  load(c);
+  const std::string computes =
+      "compute pea all pe/atom\ncompute sa all stress/atom NULL\ncompute p all pressure NULL virial\n";
+  commands(computes);
+  commands("thermo_style custom step pe c_p[1] c_p[2] c_p[4]\nthermo_modify norm no\n"
+           "kspace_style none\npair_style coul/cut 5.0\npair_coeff * *\nrun 0 post no");
+  double p_ref[3] = {evaluate("c_p[1]"), evaluate("c_p[2]"), evaluate("c_p[4]")};
+  auto pe_ref = per_atom_by_id(lmp, "pea", 1);
+  auto s_ref = per_atom_by_id(lmp, "sa", 6);
+  commands("pair_style zero 0.01\npair_coeff * *\nkspace_style kifmm 1e-9\n"
+           "kspace_modify kifmm order 12 leaf 32\nrun 0 post no");
+  double p_fmm[3] = {evaluate("c_p[1]"), evaluate("c_p[2]"), evaluate("c_p[4]")};
+  auto pe_fmm = per_atom_by_id(lmp, "pea", 1);
+  auto s_fmm = per_atom_by_id(lmp, "sa", 6);
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(p_fmm[k], p_ref[k], 1e-7 * std::fabs(p_ref[0])) << k;
+  EXPECT_LE(rel_l2(pe_fmm, pe_ref), 1e-7) << "per-atom energy";
+  EXPECT_LE(rel_l2(s_fmm, s_ref), 1e-6) << "per-atom virial (stress/atom)";
+}
+
+TEST_F(KSpaceKifmm, MpiDistributedCheckMeasuresTheFullError)
+{
+  Configuration c = two_clusters(1000, 11);
+  Configuration u = uniform_cube(1000, 12);
+  c.x.insert(c.x.end(), u.x.begin(), u.x.end());
+  c.q.insert(c.q.end(), u.q.begin(), u.q.end());
+  load(c);
+  Result ref = exact();
+  Result r = kifmm("1e-4", "order 4 leaf 32 check 1 2000");
+  const double full = relative_force_error(r.f, ref.f), measured = evaluate("v_kifmm_error");
+  EXPECT_GT(measured, 1e-8);
+  EXPECT_NEAR(measured, full, 1e-3 * full);    // every atom sampled: the exact error
+}
+
 // ---------------------------------------------------------------- YAML references
 
 TEST_F(KSpaceKifmm, YamlReferenceCoulomb)
@@ -550,5 +621,11 @@ TEST_F(MpiEqualsSerial, AllAtomsOnOneRank)
 TEST_F(MpiEqualsSerial, Rcb)
 {
   check_force_reference(REFERENCE_DIR "/kifmm_mpi_clustered_rcb.yaml");
+}
+
+// the global virial (thermo pxy with pair zero: kinetic + kspace virial) equals the 1-rank one
+TEST_F(MpiEqualsSerial, VirialRcb)
+{
+  check_force_reference(REFERENCE_DIR "/kifmm_mpi_virial_rcb.yaml");
 }
 }    // namespace

@@ -10,11 +10,21 @@
 
 namespace kifmm {
 
-int default_top_level(int nranks)
+int choose_top_level(uint64_t npoints, int nranks, int nsurf, int max_depth)
 {
-  int l = 2;
-  while (l < 5 && (uint64_t(1) << (3 * l)) < 8 * (uint64_t) std::max(nranks, 1)) ++l;
-  return l;
+  const int hi = std::max(0, std::min(5, max_depth));
+  int best = std::min(2, hi);
+  double best_bytes = std::numeric_limits<double>::max();
+  const double per_rank = (double) npoints / std::max(nranks, 1), side = std::cbrt((double) std::max(nranks, 1));
+  for (int l = std::min(2, hi); l <= hi; ++l) {
+    const double r = side / std::exp2(l), halo = std::pow(1.0 + 2.0 * r, 3) - 1.0;
+    const double bytes = (nranks > 1 ? 32.0 * per_rank * halo : 0.0) + 8.0 * nsurf * std::exp2(3 * l);
+    if (bytes < best_bytes) {
+      best_bytes = bytes;
+      best = l;
+    }
+  }
+  return best;
 }
 
 void keep_targets(Octree &tree, std::size_t n_keep)
@@ -108,7 +118,7 @@ void distributed_setup(Communicator &comm, int top_level, int leaf_size, int max
   }
 
   // counts of the cells of level L and the top tree
-  const int L = std::min(top_level > 0 ? top_level : default_top_level(nranks), max_depth);
+  const int L = std::min(top_level > 0 ? top_level : choose_top_level(cnt[0], nranks, nsurf, max_depth), max_depth);
   const std::size_t ncell = std::size_t(1) << (3 * L);
   std::vector<uint64_t> keys;
   morton_keys(out.root, n, xyz, keys);

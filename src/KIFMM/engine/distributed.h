@@ -24,8 +24,10 @@ struct DistributedData {
   double t_comm = 0;                 // time inside communication calls
 };
 
-// Level of the top tree for P ranks: the smallest L >= 2 with 8^L >= 8P, at most 5.
-int default_top_level(int nranks);
+// Level of the top tree (2..5, at most max_depth) for N points on P ranks: the one with the
+// fewest estimated bytes per rank, ghosts 32 (N/P) ((1 + 2r)^3 - 1) with r = P^(1/3) / 2^L
+// (a layer of frontier cells around a cubic domain) plus the frontier densities 8 nsurf 8^L.
+int choose_top_level(uint64_t npoints, int nranks, int nsurf, int max_depth);
 
 // Collective. n points of this rank (xyz interleaved, strengths q; every point is a target,
 // the ones with q != 0 are sources). top_level 0 = default_top_level. pow2_root rounds the

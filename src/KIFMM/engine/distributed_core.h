@@ -82,7 +82,23 @@ void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, co
   tgx_.assign(n, 0.0);
   tgy_.assign(n, 0.0);
   tgz_.assign(n, 0.0);
+  // upward densities only where they are used: cells below the top tree that appear in a V or
+  // W list of an own cell (and their subtrees, for M2M), and the frontier cells this rank is
+  // responsible for; the top cells get theirs from the reduction below (no P2M of ghost-only
+  // subtrees that no list uses)
+  {
+    const int L = dd.top.top_level;
+    up_mask_.assign(nc, 0);
+    for (const CellList *lst : {&lists_.V, &lists_.W})
+      for (int a : lst->idx)
+        if (tree_.cells[a].level > L) up_mask_[a] = 1;
+    for (std::size_t f = 0; f < dd.frontier.size(); ++f)
+      if (dd.responsible[f]) up_mask_[dd.frontier[f]] = 1;
+    for (std::size_t c = 1; c < nc; ++c)
+      if (tree_.cells[c].level > L && up_mask_[tree_.cells[c].parent]) up_mask_[c] = 1;
+  }
   upward(tree_.depth, first_level(), false);
+  up_mask_.clear();
   // densities of the frontier cells: from the responsible rank (which holds the whole cell),
   // one sum over ranks; then M2M over the top levels on every rank
   std::vector<int> slots;

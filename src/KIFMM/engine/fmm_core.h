@@ -73,6 +73,7 @@ template <class K> class FmmEvaluator : public Evaluator {
   std::vector<double> sx_, sy_, sz_, sq_, tx_, ty_, tz_, tp_, tgx_, tgy_, tgz_;
   std::vector<double> up_equiv_, dn_check_, dn_equiv_, xhat_, yhat_;
   std::vector<char> has_local_;
+  std::vector<char> up_mask_;    // distributed: cells whose upward density is computed (empty = all)
 
   double *up(int c) { return &up_equiv_[(std::size_t) c * nsurf_]; }
   double *dcheck(int c) { return &dn_check_[(std::size_t) c * nsurf_]; }
@@ -141,7 +142,7 @@ template <class K> void FmmEvaluator<K>::upward(int l_hi, int l_lo, bool m2m_onl
     const double inv_s = 1.0 / scale_[l];
     std::vector<int> list;
     for (int c = tree_.level_begin[l]; c < tree_.level_begin[l + 1]; ++c)
-      if (cells[c].gsrc > 0 && !(m2m_only && cells[c].leaf())) list.push_back(c);
+      if (cells[c].gsrc > 0 && !(m2m_only && cells[c].leaf()) && (up_mask_.empty() || up_mask_[c])) list.push_back(c);
     const int n = (int) list.size(), nchunks = (n + kBatch - 1) / kBatch;
 #pragma omp parallel if (nchunks > 1)
     {

@@ -1,0 +1,146 @@
+// Strong-scaling benchmark of the distributed evaluation (engine level, no LAMMPS):
+//   mpirun -np P bench_scaling N [uniform|plummer] [order] [reps] [top_level]
+// Each rank makes only its own points: uniform in its brick of a P-brick decomposition of
+// [-1,1]^3 (as LAMMPS's processor grid), or, for plummer, the points of a Plummer sphere in its
+// brick (every rank draws the same sequence and keeps its own; N <= 1e6). Prints one JSON line
+// (rank 0): wall time per evaluation (max over ranks), CPU seconds per evaluation (sum over
+// ranks), phases (max over ranks), bytes sent per rank and ghost points per rank (min/avg/max).
+#include "fmm_core.h"
+#include "kernels.h"
+#include "mpi_communicator.h"
+
+#include "../bench_points.h"
+
+#include <mpi.h>
+#include <omp.h>
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+namespace {
+
+double cpu_seconds()
+{
+  rusage u;
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_utime.tv_sec + 1e-6 * u.ru_utime.tv_usec + u.ru_stime.tv_sec + 1e-6 * u.ru_stime.tv_usec;
+}
+
+// processor grid px*py*pz = P as close to a cube as possible (LAMMPS picks the same for a cube)
+void grid(int P, int g[3])
+{
+  double best = 1e300;
+  for (int a = 1; a <= P; ++a)
+    if (P % a == 0)
+      for (int b = 1; b <= P / a; ++b)
+        if ((P / a) % b == 0) {
+          const int c = P / a / b;
+          const double s = (double) a * b + (double) b * c + (double) a * c;
+          if (s < best) {
+            best = s;
+            g[0] = a;
+            g[1] = b;
+            g[2] = c;
+          }
+        }
+}
+
+}    // namespace
+
+int main(int argc, char **argv)
+{
+  MPI_Init(&argc, &argv);
+  int me, P;
+  MPI_Comm_rank(MPI_COMM_WORLD, &me);
+  MPI_Comm_size(MPI_COMM_WORLD, &P);
+  const std::size_t N = argc > 1 ? (std::size_t) std::atof(argv[1]) : 100000;
+  const std::string dist = argc > 2 ? argv[2] : "uniform";
+  const int order = argc > 3 ? std::atoi(argv[3]) : 6;
+  const int reps = argc > 4 ? std::atoi(argv[4]) : 3;
+  const int top = argc > 5 ? std::atoi(argv[5]) : 0;
+  int g[3];
+  grid(P, g);
+  const int c[3] = {me % g[0], (me / g[0]) % g[1], me / (g[0] * g[1])};
+  double lo[3], hi[3];
+  for (int d = 0; d < 3; ++d) {
+    lo[d] = -1.0 + 2.0 * c[d] / g[d];
+    hi[d] = -1.0 + 2.0 * (c[d] + 1) / g[d];
+  }
+  bench::Points mine;
+  if (dist == "plummer") {
+    bench::Points all = bench::plummer(N, 7);
+    for (std::size_t i = 0; i < all.size(); ++i) {
+      bool in = true;
+      for (int d = 0; d < 3; ++d) {
+        // bricks of the box [-50,50]^3 (open at the outer faces)
+        const double x = all.xyz[3 * i + d] / 50.0;
+        in = in && (c[d] == 0 || x >= lo[d]) && (c[d] == g[d] - 1 || x < hi[d]);
+      }
+      if (in) {
+        mine.xyz.insert(mine.xyz.end(), &all.xyz[3 * i], &all.xyz[3 * i] + 3);
+        mine.q.push_back(all.q[i]);
+      }
+    }
+  } else {
+    const std::size_t n = N / P + (me < (int) (N % P) ? 1 : 0);
+    bench::Points u = bench::uniform(n, 1000 + me);
+    for (std::size_t i = 0; i < n; ++i)
+      for (int d = 0; d < 3; ++d) u.xyz[3 * i + d] = lo[d] + (u.xyz[3 * i + d] + 1.0) * 0.5 * (hi[d] - lo[d]);
+    mine = u;
+  }
+  kifmm::Options o;
+  o.order = order;
+  o.top_level = top;
+  kifmm::KernelSpec spec;
+  kifmm::FmmEvaluator<kifmm::LaplaceKernel> ev(kifmm::LaplaceKernel{}, spec, o);
+  kifmm::MpiCommunicator comm(MPI_COMM_WORLD);
+  const std::size_t n = mine.size();
+  std::vector<double> grad(3 * n);
+  ev.evaluate_distributed(comm, n, mine.xyz.data(), mine.q.data(), nullptr, grad.data());    // warm-up (operators)
+  double wall = 0, cpu = 0;
+  double ph[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+  for (int r = 0; r < reps; ++r) {
+    MPI_Barrier(MPI_COMM_WORLD);
+    const double t0 = MPI_Wtime(), c0 = cpu_seconds();
+    ev.evaluate_distributed(comm, n, mine.xyz.data(), mine.q.data(), nullptr, grad.data());
+    const double t1 = MPI_Wtime(), c1 = cpu_seconds();
+    MPI_Barrier(MPI_COMM_WORLD);
+    wall += t1 - t0;
+    cpu += c1 - c0;
+    const kifmm::Stats &s = ev.stats();
+    const double p[8] = {s.t_tree, s.t_lists, s.t_upward, s.t_m2l, s.t_wx, s.t_downward, s.t_p2p, s.t_comm};
+    for (int k = 0; k < 8; ++k) ph[k] += p[k];
+  }
+  const kifmm::Stats &s = ev.stats();
+  double mx[10], sum[10], mn[10];
+  double v[10] = {wall / reps, cpu / reps, (double) s.comm_bytes, (double) s.n_ghosts, (double) n,
+                  (double) s.ghost_bytes, 0, 0, 0, 0};
+  MPI_Allreduce(v, mx, 10, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  MPI_Allreduce(v, sum, 10, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+  MPI_Allreduce(v, mn, 10, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
+  double phmax[8];
+  MPI_Allreduce(ph, phmax, 8, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  double load[3] = {0, 0, 0};
+  if (FILE *f = fopen("/proc/loadavg", "r")) {
+    if (fscanf(f, "%lf %lf %lf", &load[0], &load[1], &load[2]) != 3) load[0] = -1;
+    fclose(f);
+  }
+  if (me == 0) {
+    printf("{\"N\": %zu, \"dist\": \"%s\", \"order\": %d, \"ranks\": %d, \"threads\": %d, \"top_level\": %d, "
+           "\"wall\": %.6g, \"cpu_sum\": %.6g, \"bytes_min\": %.0f, \"bytes_avg\": %.0f, \"bytes_max\": %.0f, "
+           "\"ghost_bytes_max\": %.0f, \"ghosts_min\": %.0f, \"ghosts_avg\": %.1f, \"ghosts_max\": %.0f, "
+           "\"own_min\": %.0f, \"own_max\": %.0f, \"depth\": %d, "
+           "\"phase_max\": {\"tree\": %.4g, \"lists\": %.4g, \"upward\": %.4g, \"m2l\": %.4g, \"wx\": %.4g, "
+           "\"downward\": %.4g, \"p2p\": %.4g, \"comm\": %.4g}, \"loadavg\": %.2f}\n",
+           N, dist.c_str(), order, P, omp_get_max_threads(), s.top_level, mx[0], sum[1], mn[2], sum[2] / P, mx[2],
+           mx[5], mn[3], sum[3] / P, mx[3], mn[4], mx[4], s.depth, phmax[0] / reps, phmax[1] / reps,
+           phmax[2] / reps, phmax[3] / reps, phmax[4] / reps, phmax[5] / reps, phmax[6] / reps, phmax[7] / reps,
+           load[0]);
+    fflush(stdout);
+  }
+  MPI_Finalize();
+  return 0;
+}

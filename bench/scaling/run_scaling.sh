@@ -1,0 +1,32 @@
+#!/bin/bash
+# Strong scaling of the distributed evaluation (doc/scaling.md):
+#   bash bench/scaling/run_scaling.sh [build dir] [max N]
+# 1 and 2 ranks x 1 and 2 threads at N = 1e5 and 1e6 (uniform, order 6, 3 timed evaluations
+# after a warm-up), then bytes sent per rank for P = 1..8 (oversubscribed: only the bytes and
+# ghost counts mean something there, not the times). Appends JSON lines to
+# bench/scaling/results/scaling.jsonl (one per run, with the load average).
+set -e
+cd "$(dirname "$0")/../.."
+B=${1:-build}
+NMAX=${2:-1e6}
+OUT=bench/scaling/results/scaling.jsonl
+mkdir -p bench/scaling/results
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
+run() {
+  local np=$1 th=$2 tag=$3
+  shift 3
+  OMP_NUM_THREADS=$th nice -n 10 mpirun --oversubscribe -np "$np" -x OMP_NUM_THREADS \
+    "$B/bench/scaling/bench_scaling" "$@" | sed "s/}\$/, \"tag\": \"$tag\"}/" | tee -a "$OUT"
+}
+Ns="1e5"
+[ "$NMAX" = "1e6" ] && Ns="1e5 1e6"
+for N in $Ns; do
+  for np in 1 2; do
+    for th in 1 2; do run "$np" "$th" strong "$N" uniform 6 3; done
+  done
+done
+for N in $Ns; do
+  for np in 3 4 6 8; do run "$np" 1 bytes "$N" uniform 6 1; done
+  run 8 1 bytes "$N" plummer 7 1
+done
+run 1 1 bytes 1e5 plummer 7 1

@@ -261,6 +261,11 @@ def make_plots(recs, outdir, cases, profile):
                                facecolors="none", edgecolors=c, s=22,
                                label=(f"{solver}: clump net-force error" if n == ns[-ncol]
                                       else None))
+            if not any(r["solver"] == "direct" for r in runs):
+                td, fd = direct_time(recs, case, n)
+                if fd == "s":    # timed on the reference's sample, scaled by N / sample
+                    ax.axvline(td, color=COLORS["direct"], lw=1.0, ls=":",
+                               label="direct sum (timed on the sample, scaled)")
             for e in TARGETS:
                 ax.axhline(e, color="0.8", lw=0.6, ls=":")
             ax.set_xscale("log")
@@ -274,7 +279,9 @@ def make_plots(recs, outdir, cases, profile):
             ax.set_xlabel("CPU time per force evaluation [s]")
             ax.set_ylabel("relative force error")
             ax.grid(True, which="major", lw=0.3)
-        axes[0][0].legend(fontsize=7, loc="best")
+        for ax in axes[0]:
+            if ax.get_legend_handles_labels()[0]:
+                ax.legend(fontsize=6, loc="best")
         fig.tight_layout()
         fn = os.path.join(outdir, f"pareto_{case}.png")
         fig.savefig(fn, dpi=110)
@@ -294,15 +301,21 @@ def make_plots(recs, outdir, cases, profile):
             for solver, style in (("kifmm", "-"), ("msm", "--"), ("ewald", "--"),
                                   ("pppm", ":")):
                 for e, mk in zip(TARGETS, ("o", "s", "^")):
-                    xs, ys = [], []
+                    xs, ys, bx, by = [], [], [], []
                     for n in ns:
                         t, flag = time_at(ok_runs(recs, case, n, solver), e)
                         if t is not None and n in natoms:
                             xs.append(natoms[n])
                             ys.append(t)
+                            if flag == "<=":
+                                bx.append(natoms[n])
+                                by.append(t)
                     if xs and (solver == "kifmm" or e != TARGETS[-1] or len(xs) > 1):
                         ax.plot(xs, ys, style, marker=mk, color=COLORS[solver], ms=4,
                                 label=f"{solver} @ {e:.0e}")
+                        # upper bounds (the fastest run already more accurate): hollow
+                        ax.scatter(bx, by, marker=mk, s=30, facecolors="white",
+                                   edgecolors=COLORS[solver], zorder=3)
             xs, ys, xe, ye, xsm, ysm = [], [], [], [], [], []
             for n in ns:
                 t, flag = direct_time(recs, case, n)
@@ -331,7 +344,7 @@ def make_plots(recs, outdir, cases, profile):
                         label="O(N) guide")
             ax.set_xscale("log")
             ax.set_yscale("log")
-            ax.set_title(case, fontsize=9)
+            ax.set_title(case + " (hollow: upper bound)", fontsize=9)
             ax.set_xlabel("N (atoms)")
             ax.set_ylabel("CPU time per force evaluation [s]")
             ax.grid(True, lw=0.3)

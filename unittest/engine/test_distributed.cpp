@@ -141,13 +141,13 @@ void check_all_partitions(const Points &p, int top_level, int leaf = 24)
 TEST(Distributed, UniformEqualsSerial)
 {
   Points p = with_zero_charges(uniform_cube(3000, 11));
-  for (int top : {2, 3, 4}) check_all_partitions(p, top);
+  for (int top : {0, 2, 3, 4}) check_all_partitions(p, top);
 }
 
 TEST(Distributed, PlummerEqualsSerial)
 {
   Points p = plummer(3000, 12);
-  for (int top : {2, 3}) check_all_partitions(p, top);
+  for (int top : {0, 2, 3}) check_all_partitions(p, top);
 }
 
 TEST(Distributed, TwoClustersEqualsSerial)
@@ -156,19 +156,33 @@ TEST(Distributed, TwoClustersEqualsSerial)
   Points u = uniform_cube(300, 14, 6.0);    // a sparse halo: coarse top leaves next to dense cells
   p.xyz.insert(p.xyz.end(), u.xyz.begin(), u.xyz.end());
   p.q.insert(p.q.end(), u.q.begin(), u.q.end());
-  for (int top : {2, 3, 4}) check_all_partitions(p, top);
+  for (int top : {0, 2, 3, 4}) check_all_partitions(p, top);
 }
 
 TEST(Distributed, DipolesEqualsSerial)
 {
   Points p = dipoles(1200, 15);
-  for (int top : {2, 3}) check_all_partitions(p, top);
+  for (int top : {0, 2, 3}) check_all_partitions(p, top);
 }
 
 TEST(Distributed, FewPointsAndDefaultTopLevel)
 {
   // fewer points than a leaf (the root is a leaf), and a handful (top leaves at levels 0..2)
   for (std::size_t n : {5, 40, 200}) check_all_partitions(uniform_cube(n, 16), 0);
+}
+
+// Adaptive top tree (top level 0): a dense cluster refines the top tree far below its uniform
+// level, small leaves make deep local subtrees below open frontier cells.
+TEST(Distributed, AdaptiveTopTreeEqualsSerial)
+{
+  Points p = plummer(4000, 21);
+  for (std::size_t i = 0; i < p.size(); ++i) p.q[i] = (i % 2 ? 1.0 : -0.5) / p.size();
+  check_all_partitions(p, 0, 8);
+  Points c = two_clusters(3000, 22);
+  Points u = uniform_cube(1000, 23, 8.0);
+  c.xyz.insert(c.xyz.end(), u.xyz.begin(), u.xyz.end());
+  c.q.insert(c.q.end(), u.q.begin(), u.q.end());
+  check_all_partitions(c, 0, 16);
 }
 
 TEST(Distributed, YukawaEqualsSerial)
@@ -182,7 +196,7 @@ TEST(Distributed, YukawaEqualsSerial)
   p.xyz.insert(p.xyz.end(), u.xyz.begin(), u.xyz.end());
   p.q.insert(p.q.end(), u.q.begin(), u.q.end());
   for (int j = 0; j < 4; ++j) {
-    Result r = compare(k, spec, p, kPartitions[j], 3);
+    Result r = compare(k, spec, p, kPartitions[j], j % 2 ? 3 : 0);
     EXPECT_LE(r.grad, 1e-10) << kPartitionNames[j];
     EXPECT_LE(r.pot, 1e-10) << kPartitionNames[j];
   }

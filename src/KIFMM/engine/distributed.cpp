@@ -117,46 +117,107 @@ void distributed_setup(Communicator &comm, int top_level, int leaf_size, int max
     if (pow2_root) out.root.half_width = std::exp2(std::ceil(std::log2(out.root.half_width)));
   }
 
-  // counts of the cells of level L and the top tree
+  // Top tree: the global tree refined from the root, level by level (one reduction of the
+  // children's counts per level), while a cell splits in the global tree and holds more than
+  // 2 N / 8^L points, L from choose_top_level: about 8^L frontier cells for uniform points,
+  // finer where the points are dense, so that no frontier cell holds much more than 2 N / 8^L
+  // points. Its size depends on L (on P), not on N.
   const int L = std::min(top_level > 0 ? top_level : choose_top_level(cnt[0], nranks, nsurf, max_depth), max_depth);
-  const std::size_t ncell = std::size_t(1) << (3 * L);
+  const double refine_above = std::max((double) leaf_size, 2.0 * (double) cnt[0] / std::exp2(3 * L));
+  const int deepest = std::min(max_depth, top_level > 0 ? L : L + 8);
   std::vector<uint64_t> keys;
   morton_keys(out.root, n, xyz, keys);
-  const int shift = 3 * (kMortonBits - L);
-  std::vector<uint64_t> counts(2 * ncell, 0);
-  for (std::size_t i = 0; i < n; ++i) {
-    keys[i] >>= shift;
-    counts[keys[i]] += q[i] != 0.0;
-    ++counts[ncell + keys[i]];
-  }
-  {
-    Timer t(out.t_comm);
-    comm.allreduce_sum(counts.data(), counts.size());
-  }
   TopTree &top = out.top;
-  build_top_tree(top, L, counts.data(), counts.data() + ncell, leaf_size, max_depth);
+  {
+    Cell rc;
+    rc.gsrc = (uint32_t) cnt[1];
+    rc.gtrg = (uint32_t) cnt[0];
+    top.cells.assign(1, rc);
+  }
+  std::vector<int> at(n, 0);    // top cell of every point (ends at its frontier cell)
+  std::vector<int> current{0}, refine, slot;
+  std::vector<uint64_t> counts;
+  while (!current.empty()) {
+    refine.clear();
+    for (int c : current) {
+      const Cell &C = top.cells[c];
+      const bool split = C.level < max_depth && ((int) C.gsrc > leaf_size || (int) C.gtrg > leaf_size);
+      const bool deeper = top_level > 0 ? C.level < L : (C.level < deepest && (C.level < 2 || C.gtrg > refine_above));
+      if (split && deeper) refine.push_back(c);
+    }
+    if (refine.empty()) break;
+    slot.assign(top.cells.size(), -1);
+    for (std::size_t k = 0; k < refine.size(); ++k) slot[refine[k]] = (int) k;
+    const int level = top.cells[refine[0]].level;    // all cells of `current` share a level
+    const int shift = 3 * (kMortonBits - level - 1);
+    counts.assign(16 * refine.size(), 0);
+    for (std::size_t i = 0; i < n; ++i) {
+      const int k = slot[at[i]];
+      if (k < 0) continue;
+      const int oct = (int) ((keys[i] >> shift) & 7);
+      counts[16 * (std::size_t) k + oct] += q[i] != 0.0;
+      ++counts[16 * (std::size_t) k + 8 + oct];
+    }
+    {
+      Timer t(out.t_comm);
+      comm.allreduce_sum(counts.data(), counts.size());
+    }
+    current.clear();
+    for (std::size_t k = 0; k < refine.size(); ++k) {
+      const int c = refine[k];
+      const int first = (int) top.cells.size();
+      int nch = 0;
+      for (int oct = 0; oct < 8; ++oct) {
+        const uint64_t s = counts[16 * k + oct], t = counts[16 * k + 8 + oct];
+        if (s + t == 0) continue;
+        const Cell P = top.cells[c];
+        Cell ch;
+        ch.level = P.level + 1;
+        ch.parent = c;
+        ch.prefix = (P.prefix << 3) | (uint64_t) oct;
+        ch.ix = 2 * P.ix + (oct & 1);
+        ch.iy = 2 * P.iy + ((oct >> 1) & 1);
+        ch.iz = 2 * P.iz + ((oct >> 2) & 1);
+        ch.gsrc = (uint32_t) s;
+        ch.gtrg = (uint32_t) t;
+        top.cells[c].child[oct] = (int) top.cells.size();
+        current.push_back((int) top.cells.size());
+        top.cells.push_back(ch);
+        ++nch;
+      }
+      top.cells[c].first_child = first;
+      top.cells[c].n_children = nch;
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      const int k = slot[at[i]];
+      if (k >= 0) at[i] = top.cells[at[i]].child[(keys[i] >> shift) & 7];
+    }
+  }
   const int ntop = (int) top.cells.size();
+  top.open.assign(ntop, 0);
+  top.top_level = 0;
+  for (int c = 0; c < ntop; ++c) {
+    const Cell &C = top.cells[c];
+    top.top_level = std::max(top.top_level, C.level);
+    top.open[c] = C.n_children == 0 && C.level < max_depth && ((int) C.gsrc > leaf_size || (int) C.gtrg > leaf_size);
+  }
 
-  // frontier cells and the frontier cell of every level-L cell
-  std::vector<int> findex(ntop, -1), of_cell(ncell, -1);
+  // frontier cells (top cells without children)
+  std::vector<int> findex(ntop, -1);
   for (int c = 0; c < ntop; ++c)
     if (top.cells[c].n_children == 0) {
       findex[c] = (int) out.frontier.size();
       out.frontier.push_back(c);
-      const Cell &C = top.cells[c];
-      const int sh = 3 * (L - C.level);
-      std::fill(of_cell.begin() + (std::size_t) (C.prefix << sh), of_cell.begin() + (std::size_t) ((C.prefix + 1) << sh),
-                findex[c]);
     }
   const int nf = (int) out.frontier.size();
 
   // this rank's points by frontier cell (counting sort, input order inside a cell)
   std::vector<int> fstart(nf + 1, 0), fpoints(n);
-  for (std::size_t i = 0; i < n; ++i) ++fstart[of_cell[keys[i]] + 1];
+  for (std::size_t i = 0; i < n; ++i) ++fstart[findex[at[i]] + 1];
   for (int f = 0; f < nf; ++f) fstart[f + 1] += fstart[f];
   {
     std::vector<int> pos(fstart.begin(), fstart.end() - 1);
-    for (std::size_t i = 0; i < n; ++i) fpoints[pos[of_cell[keys[i]]]++] = (int) i;
+    for (std::size_t i = 0; i < n; ++i) fpoints[pos[findex[at[i]]]++] = (int) i;
   }
   std::vector<int> mine, all, per_rank;
   for (int f = 0; f < nf; ++f)
@@ -193,34 +254,22 @@ void distributed_setup(Communicator &comm, int top_level, int leaf_size, int max
       if (top.cells[a].level < C.level) mark(a);
     });
   }
-  for (int f : mine) {    // (iii) small W-list top cells of own top leaves coarser than L
-    const int c = out.frontier[f];
-    const Cell &B = top.cells[c];
-    if (B.level >= L || top.open[c]) continue;
-    std::vector<int> stack;
-    // colleagues of B: top cells of B's level touching B, found by descending from the root
+  // (iii) top cells A whose parent touches an own frontier cell C_f, finer than C_f, not touching
+  // it, with at most nsurf sources: W lists of leaves in C_f take their particles (direct sum)
+  for (int f : mine) {
+    const Cell &B = top.cells[out.frontier[f]];
     std::vector<int> st{0};
     while (!st.empty()) {
       const int a = st.back();
       st.pop_back();
       const Cell &A = top.cells[a];
       if (!cells_adjacent(A, B)) continue;
-      if (A.level == B.level) stack.push_back(a);
-      else
-        for (int k = 0; k < A.n_children; ++k) st.push_back(A.first_child + k);
-    }
-    while (!stack.empty()) {
-      const int a = stack.back();
-      stack.pop_back();
-      const Cell &A = top.cells[a];
       for (int k = 0; k < A.n_children; ++k) {
         const int d = A.first_child + k;
         const Cell &D = top.cells[d];
         if (D.gsrc == 0) continue;
-        if (!cells_adjacent(D, B)) {
-          if ((int) D.gsrc <= nsurf) below(top, d, mark);
-        } else
-          stack.push_back(d);
+        if (cells_adjacent(D, B)) st.push_back(d);
+        else if (D.level > B.level && (int) D.gsrc <= nsurf) below(top, d, mark);
       }
     }
   }

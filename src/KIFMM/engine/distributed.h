@@ -30,7 +30,9 @@ struct DistributedData {
 int choose_top_level(uint64_t npoints, int nranks, int nsurf, int max_depth);
 
 // Collective. n points of this rank (xyz interleaved, strengths q; every point is a target,
-// the ones with q != 0 are sources). top_level 0 = default_top_level. pow2_root rounds the
+// the ones with q != 0 are sources). top_level 0: adaptive top tree with L = choose_top_level
+// (refined where a cell holds more than 2 N / 8^L points); > 0: the top tree is the global tree
+// down to that level exactly (tests). pow2_root rounds the
 // root half-width up to a power of two (kernels with level-dependent operators), fixed_root
 // replaces the bounding cube. nsurf: equivalent surface size (W-list direct threshold).
 void distributed_setup(Communicator &comm, int top_level, int leaf_size, int max_depth, int nsurf, bool pow2_root,

@@ -86,35 +86,48 @@ void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, co
   // W list of an own cell (and their subtrees, for M2M), and the frontier cells this rank is
   // responsible for; the top cells get theirs from the reduction below (no P2M of ghost-only
   // subtrees that no list uses)
+  // local index of every top cell
+  std::vector<int> local_of(dd.top.cells.size(), -1);
+  for (std::size_t c = 0; c < nc; ++c)
+    if (tree_.top_index[c] >= 0) local_of[tree_.top_index[c]] = (int) c;
   {
-    const int L = dd.top.top_level;
     up_mask_.assign(nc, 0);
     for (const CellList *lst : {&lists_.V, &lists_.W})
       for (int a : lst->idx)
-        if (tree_.cells[a].level > L) up_mask_[a] = 1;
+        if (tree_.top_index[a] < 0) up_mask_[a] = 1;
     for (std::size_t f = 0; f < dd.frontier.size(); ++f)
-      if (dd.responsible[f]) up_mask_[dd.frontier[f]] = 1;
+      if (dd.responsible[f]) up_mask_[local_of[dd.frontier[f]]] = 1;
     for (std::size_t c = 1; c < nc; ++c)
-      if (tree_.cells[c].level > L && up_mask_[tree_.cells[c].parent]) up_mask_[c] = 1;
+      if (tree_.top_index[c] < 0 && up_mask_[tree_.cells[c].parent]) up_mask_[c] = 1;
   }
   upward(tree_.depth, first_level(), false);
-  up_mask_.clear();
   // densities of the frontier cells: from the responsible rank (which holds the whole cell),
   // one sum over ranks; then M2M over the top levels on every rank
-  std::vector<int> slots;
-  for (std::size_t f = 0; f < dd.frontier.size(); ++f)
-    if (tree_.cells[dd.frontier[f]].level >= first_level() && tree_.cells[dd.frontier[f]].gsrc > 0)
-      slots.push_back((int) f);
+  std::vector<int> slots;    // local indices of the frontier cells with densities
+  std::vector<char> mine;
+  for (std::size_t f = 0; f < dd.frontier.size(); ++f) {
+    const int c = local_of[dd.frontier[f]];
+    if (tree_.cells[c].level >= first_level() && tree_.cells[c].gsrc > 0) {
+      slots.push_back(c);
+      mine.push_back(dd.responsible[f]);
+    }
+  }
   std::vector<double> buf(slots.size() * (std::size_t) nsurf_, 0.0);
   for (std::size_t k = 0; k < slots.size(); ++k)
-    if (dd.responsible[slots[k]]) std::copy(up(dd.frontier[slots[k]]), up(dd.frontier[slots[k]]) + nsurf_, &buf[k * nsurf_]);
+    if (mine[k]) std::copy(up(slots[k]), up(slots[k]) + nsurf_, &buf[k * nsurf_]);
   const double tc = omp_get_wtime();
   comm.allreduce_sum(buf.data(), buf.size());
   const double t_reduce = omp_get_wtime() - tc;
   stats_.t_comm += t_reduce;
   for (std::size_t k = 0; k < slots.size(); ++k)
-    std::copy(&buf[k * nsurf_], &buf[(k + 1) * nsurf_], up(dd.frontier[slots[k]]));
+    std::copy(&buf[k * nsurf_], &buf[(k + 1) * nsurf_], up(slots[k]));
+  // M2M over the top cells with children (the same on every rank)
+  for (std::size_t c = 0; c < nc; ++c) {
+    const int t = tree_.top_index[c];
+    up_mask_[c] = t >= 0 && dd.top.cells[t].n_children > 0;
+  }
   upward(dd.top.top_level - 1, first_level(), true);
+  up_mask_.clear();
   const double t4 = omp_get_wtime();
   stats_.t_upward = t4 - t3 - t_reduce;
   m2l();

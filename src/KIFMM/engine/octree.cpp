@@ -57,71 +57,6 @@ RootBox bounding_cube_of(const double lo[3], const double hi[3])
   return box;
 }
 
-void build_top_tree(TopTree &top, int top_level, const uint64_t *src_count, const uint64_t *trg_count,
-                    int leaf_size, int max_depth)
-{
-  leaf_size = std::max(leaf_size, 1);
-  max_depth = std::min(std::max(max_depth, 0), kMortonBits);
-  top.top_level = top_level;
-  top.cells.clear();
-  top.level_begin.assign(1, 0);
-  top.open.clear();
-  const std::size_t n = std::size_t(1) << (3 * top_level);
-  std::vector<uint64_t> ps(n + 1, 0), pt(n + 1, 0);    // prefix sums
-  for (std::size_t i = 0; i < n; ++i) {
-    ps[i + 1] = ps[i] + src_count[i];
-    pt[i + 1] = pt[i] + trg_count[i];
-  }
-  auto counts = [&](int level, uint64_t prefix, uint64_t &s, uint64_t &t) {
-    const int sh = 3 * (top_level - level);
-    const std::size_t b = (std::size_t) (prefix << sh), e = (std::size_t) ((prefix + 1) << sh);
-    s = ps[e] - ps[b];
-    t = pt[e] - pt[b];
-  };
-  Cell rc;
-  uint64_t s, t;
-  counts(0, 0, s, t);
-  rc.gsrc = (uint32_t) s;
-  rc.gtrg = (uint32_t) t;
-  top.cells.push_back(rc);
-  for (int level = 0;; ++level) {
-    const int begin = top.level_begin[level], end = (int) top.cells.size();
-    for (int ci = begin; ci < end; ++ci) {
-      const Cell c = top.cells[ci];
-      const bool split = level < max_depth && ((int) c.gsrc > leaf_size || (int) c.gtrg > leaf_size);
-      if (level == top_level) {
-        top.open.push_back(split);
-        continue;
-      }
-      top.open.push_back(0);
-      if (!split) continue;
-      const int first = (int) top.cells.size();
-      int nch = 0;
-      for (int oct = 0; oct < 8; ++oct) {
-        const uint64_t pre = (c.prefix << 3) | (uint64_t) oct;
-        counts(level + 1, pre, s, t);
-        if (s + t == 0) continue;
-        Cell ch;
-        ch.level = level + 1;
-        ch.parent = ci;
-        ch.prefix = pre;
-        ch.ix = 2 * c.ix + (oct & 1);
-        ch.iy = 2 * c.iy + ((oct >> 1) & 1);
-        ch.iz = 2 * c.iz + ((oct >> 2) & 1);
-        ch.gsrc = (uint32_t) s;
-        ch.gtrg = (uint32_t) t;
-        top.cells[ci].child[oct] = (int) top.cells.size();
-        top.cells.push_back(ch);
-        ++nch;
-      }
-      top.cells[ci].first_child = first;
-      top.cells[ci].n_children = nch;
-    }
-    top.level_begin.push_back(end);
-    if ((int) top.cells.size() == end) break;
-  }
-}
-
 void morton_keys(const RootBox &root, std::size_t n, const double *xyz, std::vector<uint64_t> &keys)
 {
   keys.resize(n);
@@ -235,6 +170,8 @@ void build_octree(Octree &tree, const RootBox &root, std::size_t n_src, const do
   tree.cells.clear();
   tree.level_begin.clear();
   tree.leaves.clear();
+  tree.top_index.clear();
+  if (top) tree.top_index.push_back(0);
   leaf_size = std::max(leaf_size, 1);
   max_depth = std::min(std::max(max_depth, 0), kMortonBits);
   const bool same = src_xyz == trg_xyz && n_src == n_trg;    // one set: partition once
@@ -266,12 +203,12 @@ void build_octree(Octree &tree, const RootBox &root, std::size_t n_src, const do
     counts.assign((std::size_t) n * 16, 0);
     split.assign(n, 0);
     std::size_t work = 0;
-    const bool forced = top && level < top->top_level;    // copy of the global top tree
     for (int ci = begin; ci < end; ++ci) {
       Cell &c = tree.cells[ci];
-      if (forced) split[ci - begin] = top->cells[ci].n_children > 0;
-      else if (top && level == top->top_level) {
-        const bool open = top->open[ci] != 0, here = c.n_src() + c.n_trg() > 0;
+      const int t = top ? tree.top_index[ci] : -1;
+      if (t >= 0 && top->cells[t].n_children > 0) split[ci - begin] = 1;    // copy of the top tree
+      else if (t >= 0) {                                                      // frontier cell
+        const bool open = top->open[t] != 0, here = c.n_src() + c.n_trg() > 0;
         split[ci - begin] = open && here;
         c.pruned = open && !here;
       } else
@@ -306,7 +243,9 @@ void build_octree(Octree &tree, const RootBox &root, std::size_t n_src, const do
       int nch = 0;
       for (int oct = 0; oct < 8; ++oct) {
         const uint32_t se = sp + cnt[oct], te = tp + cnt[8 + oct];
-        const int top_child = forced ? top->cells[ci].child[oct] : -1;
+        const int t = top ? tree.top_index[ci] : -1;
+        const bool forced = t >= 0 && top->cells[t].n_children > 0;
+        const int top_child = forced ? top->cells[t].child[oct] : -1;
         if (forced ? top_child >= 0 : (se > sp || te > tp)) {
           Cell ch;
           ch.level = level + 1;
@@ -321,10 +260,10 @@ void build_octree(Octree &tree, const RootBox &root, std::size_t n_src, const do
           ch.trg_end = te;
           ch.gsrc = se - sp;
           ch.gtrg = te - tp;
-          if (top && level + 1 <= top->top_level) {    // a top cell: same index as in `top`
-            const Cell &g = top->cells[tree.cells.size()];
-            ch.gsrc = g.gsrc;
-            ch.gtrg = g.gtrg;
+          if (top) tree.top_index.push_back(top_child);
+          if (top_child >= 0) {    // a top cell: the global counts
+            ch.gsrc = top->cells[top_child].gsrc;
+            ch.gtrg = top->cells[top_child].gtrg;
           }
           tree.cells[ci].child[oct] = (int) tree.cells.size();
           tree.cells.push_back(ch);

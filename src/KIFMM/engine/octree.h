@@ -48,26 +48,23 @@ struct Octree {
   std::vector<int> leaves;            // indices of leaf cells
   std::vector<uint32_t> src_order;    // sorted position -> input source index
   std::vector<uint32_t> trg_order;    // sorted position -> input target index
+  std::vector<int> top_index;         // distributed: index in the TopTree, -1 below it (else empty)
 
   double half_width(int level) const { return root.half_width / double(uint64_t(1) << level); }
   void center(const Cell &c, double out[3]) const;
   std::size_t bytes() const;
 };
 
-// Global top of a distributed tree: levels 0..top_level, made from the source and target
-// counts of all 8^top_level cells (summed over ranks) by the serial split rule, cells in the
-// order build_octree makes them (level by level, children by octant). open[i]: a cell of
-// top_level that splits further in the global tree.
+// Global top of a distributed tree, the same on every rank: cells of the global (serial) tree,
+// refined from the root where the global counts are large (see distributed.h), in the order
+// build_octree makes them (level by level, children by octant). Cells without children here
+// are the "frontier": global leaves, or cells that split further in the global tree
+// (open[i] = 1), below which the tree is built from the points a rank holds.
 struct TopTree {
-  int top_level = 0;
+  int top_level = 0;          // deepest level of the top tree
   std::vector<Cell> cells;    // structure + gsrc/gtrg; point ranges unused
-  std::vector<int> level_begin;
   std::vector<char> open;
 };
-
-// counts indexed by the Morton prefix at top_level (8^top_level entries each)
-void build_top_tree(TopTree &top, int top_level, const uint64_t *src_count, const uint64_t *trg_count,
-                    int leaf_size, int max_depth);
 
 // Bounding cube of the points (slightly enlarged so every point is strictly inside).
 RootBox bounding_cube(std::size_t n_src, const double *src_xyz, std::size_t n_trg,
@@ -77,9 +74,9 @@ RootBox bounding_cube(std::size_t n_src, const double *src_xyz, std::size_t n_tr
 RootBox bounding_cube_of(const double lo[3], const double hi[3]);
 
 // Build the tree. Points outside a given root box are clamped into its boundary cells.
-// With `top` (distributed): levels below top->top_level copy the global top tree (all its
-// cells, empty here or not, its split decisions and counts); a cell of top_level that is open
-// splits by the usual rule if it holds points here, else it is marked pruned.
+// With `top` (distributed): the top tree is copied (all its cells, empty here or not, their
+// split decisions and counts; tree.top_index maps cells to top cells, -1 below the top); an
+// open frontier cell splits by the usual rule if it holds points here, else it is pruned.
 void build_octree(Octree &tree, const RootBox &root, std::size_t n_src, const double *src_xyz,
                   std::size_t n_trg, const double *trg_xyz, int leaf_size, int max_depth,
                   const TopTree *top = nullptr);

@@ -6,7 +6,9 @@ state U_ref for this scene; here U_ref = |U_LR(0)|, the gravitational energy of 
 cloud. Panels: (B) U_LR / U_ref, (C) U_kin / U_ref and U_ela / U_ref (log scale), and the
 radius of gyration with the axis ratio of the gyration tensor. Writes out/energy.png.
 
-usage: python3 plot_energy.py [OUTDIR]
+usage: python3 plot_energy.py [OUTDIR] [TMAX]
+
+TMAX (default: the last time in energy.dat) normalizes t; give 5 for a run stopped early.
 """
 import os
 import sys
@@ -37,11 +39,12 @@ def read_table(path):
     return head, rows
 
 
-def main(directory="out"):
+def main(directory="out", tmax=None):
     head, rows = read_table(os.path.join(directory, "energy.dat"))
     col = {name: k for k, name in enumerate(head)}
     t = [r[0] for r in rows]
-    th = [ti / t[-1] for ti in t]
+    tmax = float(tmax) if tmax else t[-1]
+    th = [ti / tmax for ti in t]
     uref = abs(rows[0][col["U_LR"]])
     fig, axes = plt.subplots(1, 3, figsize=(13, 3.6))
     ax = axes[0]

@@ -510,8 +510,10 @@ def summary(recs, cases):
             if rs and not any(r["status"] == "ok" for r in rs):
                 why = set()
                 for r in rs:
-                    m = re.search(r"ERROR: ([^,(]*)", r.get("message", ""))
-                    why.add(m.group(1).strip() if m else r["status"])
+                    m = re.search(r"ERROR(?: on proc \d+)?: ([^,(]*)", r.get("message", ""))
+                    why.add(m.group(1).strip() if m else (
+                        f"skipped: {r.get('message', '')}" if r["status"] == "skipped"
+                        else r["status"]))
                 failed[c] = f"{c}: all {len(rs)} settings failed ({'; '.join(sorted(why))})"
         parts = []
         for e in TARGETS:
@@ -861,7 +863,10 @@ reference, in one invocation of the driver (`bench/solvers/run_bench.py` calling
   pass of the driver (`skipped` rows that remain are the final judgement). At N >= 5e5
   (the 1e6 runs; limits.large_n) the campaign runs kifmm at acc 1e-2, 1e-3, 1e-5, 1e-7
   only (enough to bracket the matched errors; the explicit orders are shown up to 1e5) and
-  stops or skips any run above 300 s CPU: campaign time on the shared machine.
+  stops or skips any run above 300 s CPU: campaign time on the shared machine. When every
+  kept setting of a competitor fails at some N (memory, in the clustered cases at 1e5),
+  its other settings are not tried at that N; at the next N all its settings are tried
+  again (those that failed at a smaller N are skipped).
 * **periodic cases** (`boundary p p p`, the unit cube as the cell, same configurations):
   kifmm (periodic mode of the style) against LAMMPS `ewald` and `pppm` with
   `pair_style coul/long C*s` (`pair_modify table 0`, accuracy A*F_rms as for msm; pppm

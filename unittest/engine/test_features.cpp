@@ -1,5 +1,6 @@
 // Engine behaviour: coincident points, separate sets, zero strengths, gradient-only path,
-// thread independence, operator disk cache, a user kernel, choose_order, fixed root box.
+// thread independence, mutual near field (sources = targets), operator disk cache, a user
+// kernel, choose_order, fixed root box.
 #include "direct_sum.h"
 #include "fmm_core.h"
 #include "kernels.h"
@@ -126,6 +127,94 @@ TEST(EngineFeatures, OneAndTwoThreadsAgree)
     EXPECT_LE(rel_l2(g[1], g[0]), 1e-12);
   }
   omp_set_num_threads(saved);
+}
+
+// Sources = targets (same arrays): the near field is evaluated mutually (each pair of adjacent
+// leaves once for both). Against the one-sided path (targets passed as a permuted copy, so the
+// sorted sources and targets differ): equal to 1e-13 relative on uniform, Plummer (adaptive:
+// leaves of different levels adjacent), coincident points, and the generic kernel (Yukawa);
+// coincident pairs counted as before; one and two threads give the same bits.
+TEST(EngineFeatures, MutualNearFieldEqualsOneSided)
+{
+  Points c = uniform_cube(4000, 41);
+  for (int i = 0; i < 20; ++i) {    // 20 exact duplicates (2 ordered pairs each), 10 stacked (90)
+    c.xyz.insert(c.xyz.end(), &c.xyz[3 * (11 * i)], &c.xyz[3 * (11 * i) + 3]);
+    c.q.push_back(-0.5);
+  }
+  for (int i = 0; i < 10; ++i) {
+    c.xyz.insert(c.xyz.end(), {0.25, -0.5, 0.125});
+    c.q.push_back(1.0);
+  }
+  const Points u = uniform_cube(6000, 42), pl = plummer(8000, 43);
+  struct Case {
+    const Points *p;
+    KernelSpec k;
+    int leaf;
+    std::size_t zeros;
+  };
+  const std::vector<Case> cases = {{&u, KernelSpec{}, 64, 0},
+                                   {&pl, KernelSpec{}, 40, 0},
+                                   {&c, KernelSpec{}, 32, 2 * 20 + 10 * 9},
+                                   {&u, KernelSpec{KernelType::Yukawa, 2.0}, 64, 0}};
+  for (const Case &cs : cases) {
+    const Points &p = *cs.p;
+    const std::size_t m = p.size();
+    std::vector<std::size_t> perm(m);
+    for (std::size_t i = 0; i < m; ++i) perm[i] = (i * 7919) % m;    // m not a multiple of 7919
+    std::vector<double> txyz(3 * m);
+    for (std::size_t i = 0; i < m; ++i)
+      for (int d = 0; d < 3; ++d) txyz[3 * i + d] = p.xyz[3 * perm[i] + d];
+    auto ev = kifmm::make_evaluator(cs.k, opts(6, cs.leaf));
+    std::vector<double> pm(m), gm(3 * m), po(m), go(3 * m), gn(3 * m), g1(3 * m), p1(m);
+    ev->evaluate(m, p.xyz.data(), p.q.data(), m, p.xyz.data(), pm.data(), gm.data());
+    const kifmm::Stats sm = ev->stats();
+    ev->evaluate(m, p.xyz.data(), p.q.data(), m, p.xyz.data(), nullptr, gn.data());
+    ev->evaluate(m, p.xyz.data(), p.q.data(), m, txyz.data(), po.data(), go.data());
+    const kifmm::Stats so = ev->stats();
+    std::vector<double> pb(m), gb(3 * m);    // back to the input order
+    for (std::size_t i = 0; i < m; ++i) {
+      pb[perm[i]] = po[i];
+      for (int d = 0; d < 3; ++d) gb[3 * perm[i] + d] = go[3 * i + d];
+    }
+    std::printf("  mutual vs one-sided (N=%zu, depth %d, %zu leaf pairs): pot %.2e grad %.2e\n", m, sm.depth,
+                sm.mutual_pairs, rel_l2(pm, pb), rel_l2(gm, gb));
+    EXPECT_GT(sm.mutual_pairs, 0u);    // the mutual path was taken ...
+    EXPECT_EQ(so.mutual_pairs, 0u);    // ... and not with distinct target arrays
+    EXPECT_EQ(sm.depth, so.depth);
+    EXPECT_LT(rel_l2(pm, pb), 1e-13);
+    EXPECT_LT(rel_l2(gm, gb), 1e-13);
+    EXPECT_LT(rel_l2(gn, gm), 1e-15);
+    EXPECT_EQ(sm.coincident_pairs, cs.zeros);
+    EXPECT_EQ(so.coincident_pairs, cs.zeros + m);    // distinct arrays: a point with itself counts
+    // one and two threads: the same bits
+    const int saved = omp_get_max_threads();
+    omp_set_num_threads(saved == 1 ? 2 : 1);
+    kifmm::make_evaluator(cs.k, opts(6, cs.leaf))->evaluate(m, p.xyz.data(), p.q.data(), m, p.xyz.data(), p1.data(), g1.data());
+    omp_set_num_threads(saved);
+    EXPECT_EQ(g1, gm);
+    EXPECT_EQ(p1, pm);
+  }
+}
+
+// Edge coloring of the mutual pairs has no limit on the number of colors (a coarse leaf of an
+// adaptive tree may touch hundreds of fine ones): a star of 300 pairs needs 300 colors, and no
+// color holds a leaf twice.
+TEST(EngineFeatures, MutualPairColoringHasNoColorLimit)
+{
+  std::vector<kifmm::MutualPair> pairs;
+  for (int i = 1; i <= 300; ++i) pairs.push_back({0, i, {0, 0, 0}});
+  for (int i = 1; i < 300; ++i) pairs.push_back({i, i + 1, {0, 0, 0}});
+  std::vector<int> off;
+  kifmm::color_mutual_pairs(301, pairs, off);
+  ASSERT_EQ(pairs.size(), 599u);
+  EXPECT_EQ((int) off.size() - 1, 300);
+  for (std::size_t c = 0; c + 1 < off.size(); ++c) {
+    std::vector<int> seen(301, 0);
+    for (int e = off[c]; e < off[c + 1]; ++e) {
+      EXPECT_EQ(seen[pairs[e].a]++, 0);
+      EXPECT_EQ(seen[pairs[e].b]++, 0);
+    }
+  }
 }
 
 TEST(EngineFeatures, OperatorDiskCache)

@@ -3,6 +3,8 @@
 //   tree (octree.h) -> lists (interaction_lists.h) -> operators (operator_cache.h) ->
 //   upward P2M/M2M -> M2L (FFT, m2l_fft.h) -> X (P2L) -> downward L2L -> leaf pass:
 //   P2P over U, W (M2P, or P2P for small leaves), L2P.
+// When sources and targets are the same points (N-body), the U pairs are evaluated mutually:
+// each unordered pair of adjacent leaves once for both sides (p2p_mutual.h, MutualPlan).
 // Every pass is OpenMP-parallel over cells; each cell (or target leaf) writes only its own
 // data and each target accumulates its contributions in a fixed order, so results do not
 // depend on the number of threads.
@@ -18,6 +20,7 @@
 #include "operator_cache.h"
 #include "operators.h"
 #include "p2p.h"
+#include "p2p_mutual.h"
 #include "periodic.h"
 #include "surface.h"
 
@@ -94,6 +97,10 @@ template <class K> class FmmEvaluator : public Evaluator {
   void p2l();
   void downward();
   void leaf_pass(bool want_pot, bool want_grad);
+  // mutual near field (sources = targets): open boundaries use mutual_, periodic plists_
+  MutualPlan mutual_;
+  std::size_t mutual_near(bool want_pot, const std::vector<MutualPair> &pairs, const std::vector<int> &color_off,
+                          const std::vector<int> &self_leaves, double L);
   // periodic boundaries (periodic.h, periodic_core.h)
   PeriodicImageLists plists_;
   std::shared_ptr<const LatticeTable> lattice_;
@@ -395,15 +402,19 @@ template <class K> void FmmEvaluator<K>::leaf_pass(bool want_pot, bool want_grad
   std::vector<std::size_t> zeros(nleaf, 0);
   double t0 = omp_get_wtime();
   // near field: U list; source ranges of U cells that are contiguous in the sorted source
-  // array are merged into one longer loop
-#pragma omp parallel
+  // array are merged into one longer loop. Sources = targets: each pair of leaves once
+  if (mutual_.active) {
+    stats_.mutual_pairs = mutual_.pairs.size();
+    stats_.coincident_pairs += mutual_near(want_pot, mutual_.pairs, mutual_.color_off, mutual_.self_leaves, 0.0);
+  }
+#pragma omp parallel if (!mutual_.active)
   {
     std::vector<std::pair<uint32_t, uint32_t>> ranges;
 #pragma omp for schedule(dynamic, 1)
     for (int li = 0; li < nleaf; ++li) {
       const int b = tree_.leaves[li];
       const Cell &B = cells[b];
-      if (B.n_trg() == 0) continue;
+      if (B.n_trg() == 0 || mutual_.active) continue;
       ranges.clear();
       for (const int *a = lists_.U.begin(b); a != lists_.U.end(b); ++a)
         ranges.emplace_back(cells[*a].src_begin, cells[*a].src_end);
@@ -481,7 +492,47 @@ template <class K> void FmmEvaluator<K>::leaf_pass(bool want_pot, bool want_grad
   stats_.t_downward += omp_get_wtime() - t2;
   std::size_t z = 0;
   for (auto v : zeros) z += v;
-  stats_.coincident_pairs = z;
+  stats_.coincident_pairs += z;
+}
+
+// Mutual near field: each leaf with itself (one round over the leaves), then the pairs of
+// adjacent leaves color by color (a color's pairs share no leaf). Every target accumulates in
+// the fixed order self, color 0, 1, ..., so results do not depend on the threads. L: length
+// of the periodic cell (pair shifts are in units of L). Returns the coincident pairs.
+template <class K>
+std::size_t FmmEvaluator<K>::mutual_near(bool want_pot, const std::vector<MutualPair> &pairs,
+                                         const std::vector<int> &color_off, const std::vector<int> &self,
+                                         double L)
+{
+  const auto &cells = tree_.cells;
+  std::size_t zeros = 0;
+  const double no_shift[3] = {0, 0, 0};
+  auto run = [&](int a, int b, const double *sh, bool self_pair) -> std::size_t {
+    const Cell &A = cells[a], &B = cells[b];
+    const std::size_t i0 = A.src_begin, j0 = B.src_begin;
+    std::size_t z = 0;
+    if (want_pot)
+      p2p_mutual<K, true>(k_, self_pair, A.n_src(), &sx_[i0], &sy_[i0], &sz_[i0], &sq_[i0], &tp_[i0], &tgx_[i0],
+                          &tgy_[i0], &tgz_[i0], B.n_src(), &sx_[j0], &sy_[j0], &sz_[j0], &sq_[j0], &tp_[j0],
+                          &tgx_[j0], &tgy_[j0], &tgz_[j0], sh, &z);
+    else
+      p2p_mutual<K, false>(k_, self_pair, A.n_src(), &sx_[i0], &sy_[i0], &sz_[i0], &sq_[i0], &tp_[i0], &tgx_[i0],
+                           &tgy_[i0], &tgz_[i0], B.n_src(), &sx_[j0], &sy_[j0], &sz_[j0], &sq_[j0], &tp_[j0],
+                           &tgx_[j0], &tgy_[j0], &tgz_[j0], sh, &z);
+    return z;
+  };
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : zeros)
+  for (int i = 0; i < (int) self.size(); ++i) zeros += run(self[i], self[i], no_shift, true);
+  for (int c = 0; c + 1 < (int) color_off.size(); ++c) {
+    const int e0 = color_off[c], e1 = color_off[c + 1];
+#pragma omp parallel for schedule(dynamic, 2) reduction(+ : zeros) if (e1 - e0 > 8)
+    for (int e = e0; e < e1; ++e) {
+      const MutualPair &pr = pairs[e];
+      const double sh[3] = {pr.shift[0] * L, pr.shift[1] * L, pr.shift[2] * L};
+      zeros += run(pr.a, pr.b, sh, false);
+    }
+  }
+  return zeros;
 }
 
 template <class K>
@@ -536,6 +587,10 @@ void FmmEvaluator<K>::evaluate(std::size_t n_src, const double *src_xyz, const d
   stats_.t_tree = t1 - t;
   if (opt_.periodic) build_periodic_interaction_lists(tree_, lists_, plists_);
   else build_interaction_lists(tree_, lists_);
+  // N-body (the sources are the targets, same order): mutual near field
+  mutual_.clear();
+  if (!opt_.periodic && ns == n_trg && tree_.src_order == tree_.trg_order && sx_ == tx_ && sy_ == ty_ && sz_ == tz_)
+    plan_mutual_open(tree_, lists_, mutual_);
   double t2 = omp_get_wtime();
   stats_.t_lists = t2 - t1;
   stats_.depth = tree_.depth;
@@ -569,6 +624,7 @@ void FmmEvaluator<K>::evaluate(std::size_t n_src, const double *src_xyz, const d
   downward();
   stats_.t_downward = omp_get_wtime() - t6;
   leaf_pass(pot != nullptr, grad != nullptr);
+  mutual_.clear();    // (evaluate_distributed's leaf pass is one-sided)
   if (opt_.periodic) periodic_near(pot != nullptr);
 
   // results back in input order

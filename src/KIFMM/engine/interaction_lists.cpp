@@ -1,6 +1,7 @@
 #include "interaction_lists.h"
 
 #include <algorithm>
+#include <cstdint>
 
 namespace kifmm {
 
@@ -104,6 +105,71 @@ void build_interaction_lists(const Octree &tree, InteractionLists &lists)
   flatten(V, lists.V);
   flatten(W, lists.W);
   flatten(X, lists.X);
+}
+
+void color_mutual_pairs(int n_cells, std::vector<MutualPair> &pairs, std::vector<int> &color_off)
+{
+  // used[c]: colors taken at cell c, 64 per word (grown on demand)
+  std::vector<std::vector<uint64_t>> used(n_cells);
+  std::vector<int> color(pairs.size());
+  int ncolor = 0;
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    auto &ua = used[pairs[k].a], &ub = used[pairs[k].b];
+    const std::size_t nw = std::max(ua.size(), ub.size()) + 1;
+    int c = -1;
+    for (std::size_t w = 0; w < nw && c < 0; ++w) {
+      const uint64_t taken = (w < ua.size() ? ua[w] : 0) | (w < ub.size() ? ub[w] : 0);
+      if (~taken) c = 64 * (int) w + __builtin_ctzll(~taken);
+    }
+    for (auto *u : {&ua, &ub}) {
+      if (u->size() <= (std::size_t) c / 64) u->resize(c / 64 + 1, 0);
+      (*u)[c / 64] |= uint64_t(1) << (c % 64);
+    }
+    color[k] = c;
+    ncolor = std::max(ncolor, c + 1);
+  }
+  color_off.assign(ncolor + 1, 0);
+  for (int c : color) ++color_off[c + 1];
+  for (int c = 0; c < ncolor; ++c) color_off[c + 1] += color_off[c];
+  std::vector<MutualPair> by_color(pairs.size());
+  std::vector<int> pos(color_off.begin(), color_off.end() - 1);
+  for (std::size_t k = 0; k < pairs.size(); ++k) by_color[pos[color[k]]++] = pairs[k];
+  pairs.swap(by_color);
+}
+
+bool plan_mutual_open(const Octree &tree, const InteractionLists &lists, MutualPlan &plan)
+{
+  plan.clear();
+  const auto &cells = tree.cells;
+  const int n = (int) cells.size();
+  if (lists.U.off.size() != (std::size_t) n + 1) return false;
+  std::vector<MutualPair> keep;
+  std::vector<int> self;
+  std::size_t entries = 0, self_entries = 0;
+  for (int b : tree.leaves) {
+    const Cell &B = cells[b];
+    if (B.n_trg() == 0) {
+      if (lists.U.size(b) != 0) return false;
+      continue;
+    }
+    if (B.n_src() != B.n_trg() || B.src_begin != B.trg_begin) return false;
+    self.push_back(b);
+    for (const int *a = lists.U.begin(b); a != lists.U.end(b); ++a) {
+      ++entries;
+      if (cells[*a].n_trg() == 0) return false;    // a source-only leaf: no mirror entry
+      if (*a == b) ++self_entries;
+      else if (*a > b) keep.push_back({b, *a, {0, 0, 0}});
+    }
+  }
+  // every entry must have its mirror (b in U(a) <-> a in U(b)); each leaf in its own list once
+  if (self_entries != self.size() || entries != self_entries + 2 * keep.size()) return false;
+  for (const MutualPair &pr : keep)    // (U rows are sorted)
+    if (!std::binary_search(lists.U.begin(pr.b), lists.U.end(pr.b), pr.a)) return false;
+  color_mutual_pairs(n, keep, plan.color_off);
+  plan.pairs = std::move(keep);
+  plan.self_leaves = std::move(self);
+  plan.active = true;
+  return true;
 }
 
 }    // namespace kifmm

@@ -34,4 +34,41 @@ struct InteractionLists {
 
 void build_interaction_lists(const Octree &tree, InteractionLists &lists);
 
+// Mutual near field (sources and targets are the same points): every unordered pair of
+// adjacent leaves is evaluated once for both sides (p2p_mutual.h). A pair: leaf a sees the
+// sources of leaf b at their image + shift * L, leaf b those of a at - shift * L (shift = 0
+// with open boundaries; periodic.h fills nonzero ones).
+struct MutualPair {
+  int a, b;
+  signed char shift[3];
+};
+
+// Pairs grouped by color: pairs of one color share no leaf, so they run in parallel, and
+// every target accumulates in the fixed color order (results independent of the threads).
+struct MutualPlan {
+  bool active = false;
+  std::vector<MutualPair> pairs;    // by color
+  std::vector<int> color_off;       // pairs of color c: [color_off[c], color_off[c+1])
+  std::vector<int> self_leaves;     // leaves with targets (each with itself, one round)
+  void clear()
+  {
+    active = false;
+    pairs.clear();
+    color_off.clear();
+    self_leaves.clear();
+  }
+};
+
+// Greedy edge coloring of `pairs` (cells < n_cells) in their given order (deterministic):
+// each pair takes the lowest color free at both of its leaves; no limit on the number of
+// colors (adaptive trees: a coarse leaf may touch many fine ones). Reorders `pairs` by color.
+void color_mutual_pairs(int n_cells, std::vector<MutualPair> &pairs, std::vector<int> &color_off);
+
+// Mutual plan of the open-boundary U lists of a tree whose sources and targets are the same
+// points in the same order (checked by the caller): every leaf with targets must have equal
+// source and target ranges, and U must be symmetric (each leaf in its own list once). Returns
+// false (plan inactive) otherwise. The lists are not changed: the leaf pass skips U when the
+// plan is active.
+bool plan_mutual_open(const Octree &tree, const InteractionLists &lists, MutualPlan &plan);
+
 }    // namespace kifmm

@@ -50,6 +50,8 @@ struct Stats {
   std::size_t n_sources = 0, n_targets = 0;
   std::size_t coincident_pairs = 0;   // ordered (target, source) pairs at r = 0 that were excluded
                                       // (a point with itself, same arrays, is not counted)
+  std::size_t mutual_pairs = 0;       // pairs of distinct adjacent leaves whose near field was
+                                      // evaluated once for both sides (sources = targets; 0: one-sided)
   double t_tree = 0, t_lists = 0, t_upward = 0, t_m2l = 0, t_wx = 0, t_downward = 0, t_p2p = 0;
   double t_precompute = 0;            // operator setup in this call (0 when cached)
   std::size_t operator_bytes = 0;     // memory of precomputed operators

@@ -235,28 +235,8 @@ bool plan_mutual_near(const Octree &tree, InteractionLists &lists, PeriodicImage
   // every entry must have its mirror (b <- a, s) <-> (a <- b, -s); the leaf with itself once
   if (self_entries != self.size() || entries != self_entries + 2 * keep.size()) return false;
   // greedy edge coloring in a fixed order (deterministic): lowest color free at both leaves
-  std::vector<std::array<uint64_t, 2>> used(n, {0, 0});
-  std::vector<int> color(keep.size());
-  int ncolor = 0;
-  for (std::size_t k = 0; k < keep.size(); ++k) {
-    const auto &ua = used[keep[k].a], &ub = used[keep[k].b];
-    int c = -1;
-    for (int w = 0; w < 2 && c < 0; ++w) {
-      const uint64_t freebits = ~(ua[w] | ub[w]);
-      if (freebits) c = 64 * w + __builtin_ctzll(freebits);
-    }
-    if (c < 0) return false;
-    used[keep[k].a][c / 64] |= uint64_t(1) << (c % 64);
-    used[keep[k].b][c / 64] |= uint64_t(1) << (c % 64);
-    color[k] = c;
-    ncolor = std::max(ncolor, c + 1);
-  }
-  images.color_off.assign(ncolor + 1, 0);
-  for (int c : color) ++images.color_off[c + 1];
-  for (int c = 0; c < ncolor; ++c) images.color_off[c + 1] += images.color_off[c];
-  images.pairs.resize(keep.size());
-  std::vector<int> pos(images.color_off.begin(), images.color_off.end() - 1);
-  for (std::size_t k = 0; k < keep.size(); ++k) images.pairs[pos[color[k]]++] = keep[k];
+  color_mutual_pairs(n, keep, images.color_off);
+  images.pairs = std::move(keep);
   images.self_leaves = std::move(self);
   images.mutual = true;
   // the U entries now live in the pairs: the free-space U pass finds empty lists

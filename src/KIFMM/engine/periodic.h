@@ -41,12 +41,7 @@ struct ImageList {
   const signed char *shift_of(int e) const { return &shift[3 * (std::size_t) e]; }
 };
 
-// A pair of adjacent leaves of the near field evaluated once for both (sources = targets):
-// leaf a sees the sources of leaf b at their image + shift * L, leaf b those of a at - shift * L.
-struct MutualPair {
-  int a, b;
-  signed char shift[3];
-};
+// MutualPair (a pair of adjacent leaves evaluated once for both): interaction_lists.h
 
 struct PeriodicImageLists {
   ImageList U, W, X;      // entries with a nonzero shift (the n = 0 ones are in InteractionLists)
@@ -71,8 +66,7 @@ struct PeriodicImageLists {
 };
 
 // Mutual plan from the periodic lists (U plain entries in `lists`, image ones in `images`):
-// returns false (and changes nothing) when the U relation is not symmetric or more than 128
-// colors would be needed; otherwise fills images.pairs/color_off/self_leaves and empties
+// returns false (and changes nothing) when the U relation is not symmetric; otherwise fills images.pairs/color_off/self_leaves and empties
 // lists.U. Only for trees whose sources and targets are the same points.
 bool plan_mutual_near(const Octree &tree, InteractionLists &lists, PeriodicImageLists &images);
 

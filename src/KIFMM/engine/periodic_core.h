@@ -312,37 +312,9 @@ template <class K> void FmmEvaluator<K>::periodic_near(bool want_pot)
   const double L = 2.0 * tree_.root.half_width;
   const int nleaf = (int) tree_.leaves.size();
   const double t_begin = omp_get_wtime();
-  if (plists_.mutual) {
-    // each leaf with itself (pairs j > i), then the pairs of adjacent leaves color by color
-    std::size_t zeros = 0;
-    const auto &self = plists_.self_leaves;
-    const double no_shift[3] = {0, 0, 0};
-    auto run = [&](int a, int b, const double *sh, bool self_pair) -> std::size_t {
-      const Cell &A = cells[a], &B = cells[b];
-      const std::size_t i0 = A.src_begin, j0 = B.src_begin;
-      std::size_t z = 0;
-      if (want_pot)
-        p2p_mutual<K, true>(k_, self_pair, A.n_src(), &sx_[i0], &sy_[i0], &sz_[i0], &sq_[i0], &tp_[i0], &tgx_[i0],
-                            &tgy_[i0], &tgz_[i0], B.n_src(), &sx_[j0], &sy_[j0], &sz_[j0], &sq_[j0], &tp_[j0],
-                            &tgx_[j0], &tgy_[j0], &tgz_[j0], sh, &z);
-      else
-        p2p_mutual<K, false>(k_, self_pair, A.n_src(), &sx_[i0], &sy_[i0], &sz_[i0], &sq_[i0], &tp_[i0],
-                             &tgx_[i0], &tgy_[i0], &tgz_[i0], B.n_src(), &sx_[j0], &sy_[j0], &sz_[j0], &sq_[j0],
-                             &tp_[j0], &tgx_[j0], &tgy_[j0], &tgz_[j0], sh, &z);
-      return z;
-    };
-#pragma omp parallel for schedule(dynamic, 1) reduction(+ : zeros)
-    for (int i = 0; i < (int) self.size(); ++i) zeros += run(self[i], self[i], no_shift, true);
-    for (int c = 0; c + 1 < (int) plists_.color_off.size(); ++c) {
-      const int e0 = plists_.color_off[c], e1 = plists_.color_off[c + 1];
-#pragma omp parallel for schedule(dynamic, 2) reduction(+ : zeros) if (e1 - e0 > 8)
-      for (int e = e0; e < e1; ++e) {
-        const MutualPair &pr = plists_.pairs[e];
-        const double sh[3] = {pr.shift[0] * L, pr.shift[1] * L, pr.shift[2] * L};
-        zeros += run(pr.a, pr.b, sh, false);
-      }
-    }
-    stats_.coincident_pairs += zeros;
+  if (plists_.mutual) {    // each leaf with itself, then the pairs of adjacent leaves color by color
+    stats_.mutual_pairs = plists_.pairs.size();
+    stats_.coincident_pairs += mutual_near(want_pot, plists_.pairs, plists_.color_off, plists_.self_leaves, L);
   }
 #pragma omp parallel
   {

@@ -75,6 +75,38 @@ std::vector<std::vector<double> *> arrays(OperatorSet &op)
   return a;
 }
 
+// Operators computed by builds with different compilers or instruction sets (FMA contraction,
+// AVX-512, sanitizers) differ in the last bits. A run that loads another build's file gets a
+// trajectory that differs in the last bits from one that computes its own, which chaotic
+// dynamics amplify, and MPI ranks could even use different sets. So the file name carries a
+// fingerprint of the build that computed it.
+uint64_t build_fingerprint()
+{
+  Fnv h;
+  const char *flags = __VERSION__
+#if defined(__AVX512F__)
+      " avx512f"
+#endif
+#if defined(__AVX2__)
+      " avx2"
+#endif
+#if defined(__FMA__)
+      " fma"
+#endif
+#if defined(__FAST_MATH__)
+      " fast-math"
+#endif
+#if defined(__SANITIZE_ADDRESS__)
+      " asan"
+#endif
+#if defined(__OPTIMIZE__)
+      " opt"
+#endif
+      ;
+  h.add(flags, std::strlen(flags));
+  return h.h;
+}
+
 }    // namespace
 
 std::string operator_cache_file(const std::string &cache_dir, const std::string &id, int p)
@@ -91,7 +123,10 @@ std::string operator_cache_file(const std::string &cache_dir, const std::string 
       s += b;
     }
   }
-  return cache_dir + "/kifmm_ops_v" + std::to_string(kOperatorVersion) + "_" + s + "_p" + std::to_string(p) + ".bin";
+  char build[24];
+  std::snprintf(build, sizeof build, "_b%08x", (unsigned) (build_fingerprint() & 0xffffffffu));
+  return cache_dir + "/kifmm_ops_v" + std::to_string(kOperatorVersion) + "_" + s + "_p" + std::to_string(p) + build +
+      ".bin";
 }
 
 bool write_operator_file(const std::string &path, const OperatorSet &op0)

@@ -99,6 +99,20 @@ TEST_F(PluginRegistry, FormattedLogMessage)
   EXPECT_NE(text.find("kifmm_test_hello: hello 42 times"), std::string::npos) << text;
 }
 
+TEST_F(PluginRegistry, BadArgumentsToThePluginCommandGiveClearErrors)
+{
+  kifmm_lammps::install_launcher_styles(lmp);
+  ASSERT_TRUE(has_command("plugin"));
+  EXPECT_LAMMPS_ERROR(command("plugin"), "ERROR: Illegal plugin command: expected load, unload, list");
+  EXPECT_LAMMPS_ERROR(command("plugin lod x.so"), "ERROR: Illegal plugin command: unknown keyword lod");
+  EXPECT_LAMMPS_ERROR(command("plugin load"), "ERROR: Illegal plugin load command: missing file name");
+  EXPECT_LAMMPS_ERROR(command("plugin unload fix"), "ERROR: Illegal plugin unload command: expected");
+  EXPECT_LAMMPS_ERROR(command("plugin list all"), "ERROR: Illegal plugin list command: unexpected argument all");
+  EXPECT_LAMMPS_ERROR(command("plugin clear now"), "ERROR: Illegal plugin clear command: unexpected argument now");
+  EXPECT_LAMMPS_ERROR(command("plugin restore 1"),
+                      "ERROR: Illegal plugin restore command: unexpected argument 1");
+}
+
 TEST_F(PluginRegistry, UnknownStyleGivesLammpsOwnError)
 {
   EXPECT_LAMMPS_ERROR(command("kspace_style no_such_kspace"), "Unrecognized kspace style");

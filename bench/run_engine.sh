@@ -25,7 +25,11 @@ load_after=$(cut -d' ' -f1-3 /proc/loadavg)
   echo "operators already in memory (\"eval\" excludes operator setup and includes tree + lists)."
   echo "Error: relative RMS gradient (force) error on 2000 random targets vs the direct sum."
   echo "Direct (est.) = N^2 / (pairs/s of the vectorized direct sum measured in the same run)."
-  echo "P2P pairs/s = near-field (U list) pairs / P2P time. Precompute: cold = SVD + kernel FFTs,"
+  echo "P2P pairs/s = near-field (U list) target-source pairs / P2P time; the sources are the targets,"
+  echo "so the engine evaluates each pair of adjacent leaves once for both (mutual near field) and this"
+  echo "counts both directions of a pair. 1-thread CPU: CPU seconds of one evaluation with 1 thread"
+  echo "(load-independent cost); one-sided: the same with the targets passed as a shuffled copy of"
+  echo "the sources (the one-sided near field). Precompute: cold = SVD + kernel FFTs,"
   echo "disk = read from the on-disk operator cache."
   echo
   echo "$table"

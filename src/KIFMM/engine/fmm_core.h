@@ -495,10 +495,10 @@ template <class K> void FmmEvaluator<K>::leaf_pass(bool want_pot, bool want_grad
   stats_.coincident_pairs += z;
 }
 
-// Mutual near field: each leaf with itself (one round over the leaves), then the pairs of
-// adjacent leaves color by color (a color's pairs share no leaf). Every target accumulates in
-// the fixed order self, color 0, 1, ..., so results do not depend on the threads. L: length
-// of the periodic cell (pair shifts are in units of L). Returns the coincident pairs.
+// Mutual near field: each leaf with itself, then the pairs of adjacent leaves in color order
+// (a color's pairs share no leaf). Every target accumulates in the fixed order self, color 0,
+// 1, ..., so results do not depend on the threads. L: length of the periodic cell (pair shifts
+// are in units of L). Returns the coincident pairs.
 template <class K>
 std::size_t FmmEvaluator<K>::mutual_near(bool want_pot, const std::vector<MutualPair> &pairs,
                                          const std::vector<int> &color_off, const std::vector<int> &self,
@@ -521,17 +521,34 @@ std::size_t FmmEvaluator<K>::mutual_near(bool want_pot, const std::vector<Mutual
                            &tgx_[j0], &tgy_[j0], &tgz_[j0], sh, &z);
     return z;
   };
-#pragma omp parallel for schedule(dynamic, 1) reduction(+ : zeros)
-  for (int i = 0; i < (int) self.size(); ++i) zeros += run(self[i], self[i], no_shift, true);
-  for (int c = 0; c + 1 < (int) color_off.size(); ++c) {
-    const int e0 = color_off[c], e1 = color_off[c + 1];
-#pragma omp parallel for schedule(dynamic, 2) reduction(+ : zeros) if (e1 - e0 > 8)
-    for (int e = e0; e < e1; ++e) {
-      const MutualPair &pr = pairs[e];
-      const double sh[3] = {pr.shift[0] * L, pr.shift[1] * L, pr.shift[2] * L};
-      zeros += run(pr.a, pr.b, sh, false);
+  // One task per pair, created in the order self leaves, color 0, 1, ... with a dependence on
+  // each of its two leaves: tasks that share a leaf run in creation order (the fixed
+  // per-target order), all others as soon as a thread is free (no barrier per color: on a
+  // loaded machine one descheduled thread would stall every round).
+  const int ns = (int) self.size(), np = (int) pairs.size();
+  std::vector<std::size_t> z(ns + np, 0);
+  std::vector<char> dep(cells.size());
+  char *d = dep.data();
+  std::size_t *zp = z.data();
+  (void) color_off;    // the pairs are stored by color
+#pragma omp parallel
+#pragma omp single
+  {
+    for (int i = 0; i < ns; ++i) {
+#pragma omp task depend(inout : d[self[i]]) firstprivate(i)
+      zp[i] = run(self[i], self[i], no_shift, true);
+    }
+    for (int e = 0; e < np; ++e) {
+      const int a = pairs[e].a, b = pairs[e].b;
+#pragma omp task depend(inout : d[a], d[b]) firstprivate(e)
+      {
+        const MutualPair &pr = pairs[e];
+        const double sh[3] = {pr.shift[0] * L, pr.shift[1] * L, pr.shift[2] * L};
+        zp[ns + e] = run(pr.a, pr.b, sh, false);
+      }
     }
   }
+  for (std::size_t v : z) zeros += v;
   return zeros;
 }
 

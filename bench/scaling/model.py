@@ -17,16 +17,18 @@ BETA = 5e9       # bytes/s per rank (assumed; a 50-100 Gb/s link shared by the c
 NSURF = {6: 152, 7: 218, 8: 296}
 
 
-def choose_top_level(n, p, nsurf, max_depth=20):
+def choose_top_level(n, p, nsurf, max_depth=20, leaf_size=256):
     """same rule as kifmm::choose_top_level (engine/distributed.cpp)"""
-    best, best_bytes = 2, float("inf")
+    best, best_cost = 2, float("inf")
     side = p ** (1.0 / 3.0)
+    leaves = 2.0 * n / leaf_size + 1.0
     for l in range(2, min(5, max_depth) + 1):
         r = side / 2 ** l
         halo = (1 + 2 * r) ** 3 - 1
-        b = (32.0 * n / p * halo if p > 1 else 0.0) + 8.0 * nsurf * 8 ** l
-        if b < best_bytes:
-            best, best_bytes = l, b
+        ghosts = n / p * halo if p > 1 else 0.0
+        cost = ghosts * (32.0 + 4096.0) + 8.0 * nsurf * min(8 ** l, leaves)
+        if cost < best_cost:
+            best, best_cost = l, cost
     return best
 
 
@@ -81,45 +83,46 @@ def main():
     print(f"assumed network: latency {ALPHA:.0e} s, bandwidth {BETA:.1e} B/s per rank")
     print()
     print("# model: time per evaluation (s), order 6, uniform, cubic domains")
-    print("| N | P | N/P | L | ghosts/own | compute | bytes/rank | comm | comm/compute |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("| N | P | N/P | L | ghosts/own | ideal c1 N/P | compute (with ghosts) | bytes/rank | comm |"
+          " comm share | efficiency |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     nsurf = NSURF[6]
+
+    def model(n, p):
+        npr = n / p
+        level = choose_top_level(n, p, nsurf)
+        h = halo_model(p, level)
+        t_comp = c1 * npr * (1 + kappa * h)
+        frontier = min(8 ** level, 2 * n / 256)
+        b_ghost = 32 * npr * h
+        b_red = 2 * 8 * nsurf * frontier     # ring allreduce sends about twice the buffer
+        b_small = 2 * 16 * 8 ** level + 8 * 26   # count reductions, requests
+        nbytes = b_ghost + b_red + b_small
+        msgs = 4 * 2 * math.log2(p) + 2 * 26 + p + 2 * level   # allreduces, neighbour messages, alltoall of counts
+        t_comm = ALPHA * msgs + nbytes / BETA
+        return level, h, t_comp, nbytes, t_comm
+
     for n in (1e7, 1e8, 1e9):
         for p in (64, 256, 1024, 4096):
-            npr = n / p
-            level = choose_top_level(n, p, nsurf)
-            h = halo_model(p, level)
-            t_comp = c1 * npr * (1 + kappa * h)
-            frontier = min(8 ** level, n / 64)
-            b_ghost = 32 * npr * h
-            b_red = 2 * 8 * nsurf * frontier     # ring allreduce sends about twice the buffer
-            b_small = 2 * 16 * 8 ** level + 8 * 26   # counts allreduce, requests
-            nbytes = b_ghost + b_red + b_small
-            msgs = 4 * 2 * math.log2(p) + 2 * 26 + p   # allreduces, neighbour exchanges, alltoall of counts
-            t_comm = ALPHA * msgs + nbytes / BETA
-            print(f"| {n:.0e} | {p} | {npr:.3g} | {level} | {h:.2f} | {t_comp:.3g} | {nbytes:.3g} | "
-                  f"{t_comm:.3g} | {t_comm / t_comp:.3f} |")
-    # where communication dominates: N/P at which comm = compute
+            level, h, t_comp, nbytes, t_comm = model(n, p)
+            ideal = c1 * n / p
+            print(f"| {n:.0e} | {p} | {n / p:.3g} | {level} | {h:.2f} | {ideal:.3g} | {t_comp:.3g} | {nbytes:.3g} | "
+                  f"{t_comm:.3g} | {t_comm / (t_comp + t_comm):.3f} | {ideal / (t_comp + t_comm):.2f} |")
     print()
-    print("# N/P below which communication exceeds computation (model)")
-    print("| P | L | N/P at comm = compute |")
-    print("|---|---|---|")
+    print("# N/P below which communication is more than 10% of the time, and the efficiency there")
+    print("| P | N/P | L | ghosts/own | efficiency |")
+    print("|---|---|---|---|---|")
     for p in (64, 256, 1024, 4096):
         lo, hi = 1.0, 1e9
         for _ in range(200):
             mid = math.sqrt(lo * hi)
-            n = mid * p
-            level = choose_top_level(n, p, nsurf)
-            h = halo_model(p, level)
-            t_comp = c1 * mid * (1 + kappa * h)
-            frontier = min(8 ** level, n / 64)
-            nbytes = 32 * mid * h + 2 * 8 * nsurf * frontier + 2 * 16 * 8 ** level
-            t_comm = ALPHA * (8 * math.log2(p) + 52 + p) + nbytes / BETA
-            if t_comm > t_comp:
+            level, h, t_comp, nbytes, t_comm = model(mid * p, p)
+            if t_comm > 0.1 * (t_comp + t_comm):
                 lo = mid
             else:
                 hi = mid
-        print(f"| {p} | {choose_top_level(hi * p, p, nsurf)} | {hi:.3g} |")
+        level, h, t_comp, nbytes, t_comm = model(hi * p, p)
+        print(f"| {p} | {hi:.3g} | {level} | {h:.2f} | {c1 * hi / (t_comp + t_comm):.2f} |")
 
 
 if __name__ == "__main__":

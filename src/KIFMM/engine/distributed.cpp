@@ -10,17 +10,20 @@
 
 namespace kifmm {
 
-int choose_top_level(uint64_t npoints, int nranks, int nsurf, int max_depth)
+int choose_top_level(uint64_t npoints, int nranks, int nsurf, int max_depth, int leaf_size)
 {
   const int hi = std::max(0, std::min(5, max_depth));
   int best = std::min(2, hi);
-  double best_bytes = std::numeric_limits<double>::max();
+  double best_cost = std::numeric_limits<double>::max();
   const double per_rank = (double) npoints / std::max(nranks, 1), side = std::cbrt((double) std::max(nranks, 1));
+  // frontier cells: at most 8^L, and no more than about the leaves of the whole tree
+  const double leaves = 2.0 * (double) npoints / std::max(leaf_size, 1) + 1.0;
   for (int l = std::min(2, hi); l <= hi; ++l) {
     const double r = side / std::exp2(l), halo = std::pow(1.0 + 2.0 * r, 3) - 1.0;
-    const double bytes = (nranks > 1 ? 32.0 * per_rank * halo : 0.0) + 8.0 * nsurf * std::exp2(3 * l);
-    if (bytes < best_bytes) {
-      best_bytes = bytes;
+    const double ghosts = nranks > 1 ? per_rank * halo : 0.0;
+    const double cost = ghosts * (32.0 + kGhostWork) + 8.0 * nsurf * std::min(std::exp2(3 * l), leaves);
+    if (cost < best_cost) {
+      best_cost = cost;
       best = l;
     }
   }
@@ -122,7 +125,7 @@ void distributed_setup(Communicator &comm, int top_level, int leaf_size, int max
   // 2 N / 8^L points, L from choose_top_level: about 8^L frontier cells for uniform points,
   // finer where the points are dense, so that no frontier cell holds much more than 2 N / 8^L
   // points. Its size depends on L (on P), not on N.
-  const int L = std::min(top_level > 0 ? top_level : choose_top_level(cnt[0], nranks, nsurf, max_depth), max_depth);
+  const int L = std::min(top_level > 0 ? top_level : choose_top_level(cnt[0], nranks, nsurf, max_depth, leaf_size), max_depth);
   const double refine_above = std::max((double) leaf_size, 2.0 * (double) cnt[0] / std::exp2(3 * L));
   const int deepest = std::min(max_depth, top_level > 0 ? L : L + 8);
   std::vector<uint64_t> keys;

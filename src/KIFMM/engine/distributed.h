@@ -24,10 +24,14 @@ struct DistributedData {
   double t_comm = 0;                 // time inside communication calls
 };
 
-// Level of the top tree (2..5, at most max_depth) for N points on P ranks: the one with the
-// fewest estimated bytes per rank, ghosts 32 (N/P) ((1 + 2r)^3 - 1) with r = P^(1/3) / 2^L
-// (a layer of frontier cells around a cubic domain) plus the frontier densities 8 nsurf 8^L.
-int choose_top_level(uint64_t npoints, int nranks, int nsurf, int max_depth);
+// Level L of the top tree (2..5, at most max_depth) for N points on P ranks: the one with the
+// lowest estimated cost per rank, counted in bytes: ghost points ((N/P) ((1 + 2r)^3 - 1) with
+// r = P^(1/3) / 2^L, a layer of frontier cells around a cubic domain) at 32 bytes plus
+// kGhostWork for the work they cause (tree build, near-field sources; a ghost point costs
+// about 0.8 of an own point's CPU, i.e. ~14 kB at 5 GB/s, see doc/scaling.md: 4 kB is a
+// conservative weight), plus the frontier densities 8 nsurf min(8^L, 2N / leaf_size).
+constexpr double kGhostWork = 4096.0;
+int choose_top_level(uint64_t npoints, int nranks, int nsurf, int max_depth, int leaf_size);
 
 // Collective. n points of this rank (xyz interleaved, strengths q; every point is a target,
 // the ones with q != 0 are sources). top_level 0: adaptive top tree with L = choose_top_level

@@ -38,4 +38,13 @@ load_after=$(cut -d' ' -f1-3 /proc/loadavg)
   echo "1e5 uniform @5e-6: 0.21 s, @1.5e-7: 0.26 s, @1.5e-10: 0.43 s; 1e5 Plummer @6e-6: 0.39 s;"
   echo "1e6 uniform @3e-6: 2.9 s, @1e-7: 3.7 s; tree setup 0.03 s at 1e5; direct sum 1e5: 4.6 s (2.2e9 pairs/s)."
 } > "$OUT"
+{
+  echo
+  echo "Against the reference points (\`bench/anchor_ratios.py\`: per reference point the row of least"
+  echo "1-thread CPU time at or below its error; eval / ref is inflated by the machine's load, CPU/2 / ref"
+  echo "assumes ideal 2-thread scaling, ref. s-u / our s-u compares the times each normalised by its own"
+  echo "direct sum; < 1 is faster than the reference):"
+  echo
+  python3 "$ROOT/bench/anchor_ratios.py" "$OUT"
+} > "$OUT.tmp" && cat "$OUT.tmp" >> "$OUT" && rm -f "$OUT.tmp"
 echo "wrote $OUT"

@@ -149,6 +149,7 @@ def main():
     ap.add_argument("--results", required=True, help="results file (JSON lines, appended)")
     ap.add_argument("--only", default="", help="comma-separated case names")
     ap.add_argument("--max-n", type=float, default=0, help="skip N above this")
+    ap.add_argument("--min-n", type=float, default=0, help="skip N below this")
     ap.add_argument("--force", action="store_true", help="rerun runs already in the results")
     ap.add_argument("--threads", default=os.environ.get("OMP_NUM_THREADS", "1"))
     ap.add_argument("--commit", default="", help="source commit of the binary (recorded)")
@@ -251,6 +252,9 @@ def main():
         prev_n = None
         for n, given, label in inputs:
             if args.max_n and isinstance(n, int) and n > args.max_n:
+                continue
+            if args.min_n and isinstance(n, int) and n < args.min_n:
+                prev_n = n    # (the competitors at the next N are pruned from this N's runs)
                 continue
             tag = f"{name}_{label or n}"
             data = given or os.path.join(args.work, "data", tag + ".data")

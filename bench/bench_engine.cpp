@@ -14,6 +14,7 @@
 #include "fmm_core.h"
 #include "kernels.h"
 #include "operator_cache.h"
+#include "surface.h"
 
 #include "bench_points.h"
 
@@ -209,6 +210,15 @@ int main(int argc, char **argv)
       for (int b : tr.leaves)
         for (const int *a = li.U.begin(b); a != li.U.end(b); ++a)
           pairs += double(tr.cells[b].n_trg()) * tr.cells[*a].n_src();
+      // the mutual near field also takes the direct W/X pairs of small leaves (both directions)
+      const int nsurf = surface_size(order);
+      if (st.mutual_pairs > 0)
+        for (int b : tr.leaves)
+          for (const int *a = li.W.begin(b); a != li.W.end(b); ++a) {
+            const Cell &A = tr.cells[*a];
+            if (A.leaf() && (int) A.gtrg <= nsurf && (int) A.gsrc <= nsurf)
+              pairs += 2.0 * tr.cells[b].n_trg() * A.n_src();
+          }
       r.p2p_rate = pairs / st.t_p2p;
       r.direct_rate = direct_rate;
       r.t_direct_full = double(n) * n / direct_rate;

@@ -132,7 +132,8 @@ TEST(EngineFeatures, OneAndTwoThreadsAgree)
 // Sources = targets (same arrays): the near field is evaluated mutually (each pair of adjacent
 // leaves once for both). Against the one-sided path (targets passed as a permuted copy, so the
 // sorted sources and targets differ): equal to 1e-13 relative on uniform, Plummer (adaptive:
-// leaves of different levels adjacent), coincident points, and the generic kernel (Yukawa);
+// leaves of different levels adjacent, and direct W/X pairs of small leaves, also mutual),
+// coincident points, and the generic kernel (Yukawa);
 // coincident pairs counted as before; one and two threads give the same bits.
 TEST(EngineFeatures, MutualNearFieldEqualsOneSided)
 {

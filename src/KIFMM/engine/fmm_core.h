@@ -446,6 +446,8 @@ template <class K> void FmmEvaluator<K>::leaf_pass(bool want_pot, bool want_grad
       const std::size_t t0i = B.trg_begin;
       for (const int *a = lists_.W.begin(b); a != lists_.W.end(b); ++a) {
         const Cell &A = cells[*a];
+        if (mutual_.active && A.leaf() && (int) A.gtrg <= mutual_.w_direct_max && (int) A.gsrc <= mutual_.w_direct_max)
+          continue;    // in the mutual pairs (with the dual X entry)
         if ((int) A.gsrc <= nsurf_) {    // direct is cheaper than M2P (subtree sources are contiguous)
           const std::size_t s0 = A.src_begin;
           p2p_pg<K, false>(k_, want_pot, B.n_trg(), &tx_[t0i], &ty_[t0i], &tz_[t0i], A.n_src(), &sx_[s0], &sy_[s0],
@@ -464,6 +466,7 @@ template <class K> void FmmEvaluator<K>::leaf_pass(bool want_pot, bool want_grad
     const int b = tree_.leaves[li];
     const Cell &B = cells[b];
     if (B.n_trg() == 0 || !x_direct(b)) continue;
+    if (mutual_.active && mutual_.w_direct_max >= nsurf_) continue;    // in the mutual pairs
     const std::size_t t0i = B.trg_begin;
     for (const int *a = lists_.X.begin(b); a != lists_.X.end(b); ++a) {
       const Cell &A = cells[*a];
@@ -607,7 +610,7 @@ void FmmEvaluator<K>::evaluate(std::size_t n_src, const double *src_xyz, const d
   // N-body (the sources are the targets, same order): mutual near field
   mutual_.clear();
   if (!opt_.periodic && ns == n_trg && tree_.src_order == tree_.trg_order && sx_ == tx_ && sy_ == ty_ && sz_ == tz_)
-    plan_mutual_open(tree_, lists_, mutual_);
+    plan_mutual_open(tree_, lists_, mutual_, nsurf_);    // U, and W/X pairs of small leaves
   double t2 = omp_get_wtime();
   stats_.t_lists = t2 - t1;
   stats_.depth = tree_.depth;

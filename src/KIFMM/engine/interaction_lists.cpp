@@ -137,7 +137,7 @@ void color_mutual_pairs(int n_cells, std::vector<MutualPair> &pairs, std::vector
   pairs.swap(by_color);
 }
 
-bool plan_mutual_open(const Octree &tree, const InteractionLists &lists, MutualPlan &plan)
+bool plan_mutual_open(const Octree &tree, const InteractionLists &lists, MutualPlan &plan, int direct_max)
 {
   plan.clear();
   const auto &cells = tree.cells;
@@ -165,6 +165,30 @@ bool plan_mutual_open(const Octree &tree, const InteractionLists &lists, MutualP
   if (self_entries != self.size() || entries != self_entries + 2 * keep.size()) return false;
   for (const MutualPair &pr : keep)    // (U rows are sorted)
     if (!std::binary_search(lists.U.begin(pr.b), lists.U.end(pr.b), pr.a)) return false;
+  if (direct_max >= 0 && lists.W.off.size() == (std::size_t) n + 1 && lists.X.off.size() == (std::size_t) n + 1) {
+    // W entries A of B with A a small leaf <-> X entries B of A (A small leaf: direct X)
+    auto small_leaf = [&](int a) { return cells[a].leaf() && (int) cells[a].gtrg <= direct_max; };
+    std::size_t nx = 0;
+    std::vector<std::vector<int>> xs(n);
+    for (int a : tree.leaves)
+      if (cells[a].n_trg() > 0 && small_leaf(a)) {
+        xs[a].assign(lists.X.begin(a), lists.X.end(a));
+        std::sort(xs[a].begin(), xs[a].end());
+        nx += xs[a].size();
+      }
+    std::size_t nw = 0;
+    for (int b : tree.leaves) {
+      if (cells[b].n_trg() == 0) continue;
+      for (const int *a = lists.W.begin(b); a != lists.W.end(b); ++a) {
+        if (!small_leaf(*a) || (int) cells[*a].gsrc > direct_max) continue;
+        if (cells[*a].n_trg() == 0 || !std::binary_search(xs[*a].begin(), xs[*a].end(), b)) return false;
+        keep.push_back({b, *a, {0, 0, 0}});
+        ++nw;
+      }
+    }
+    if (nw != nx) return false;
+    plan.w_direct_max = direct_max;
+  }
   color_mutual_pairs(n, keep, plan.color_off);
   plan.pairs = std::move(keep);
   plan.self_leaves = std::move(self);

@@ -50,9 +50,11 @@ struct MutualPlan {
   std::vector<MutualPair> pairs;    // by color
   std::vector<int> color_off;       // pairs of color c: [color_off[c], color_off[c+1])
   std::vector<int> self_leaves;     // leaves with targets (each with itself, one round)
+  int w_direct_max = -1;            // open plan: W/X leaf pairs of at most this many points included
   void clear()
   {
     active = false;
+    w_direct_max = -1;
     pairs.clear();
     color_off.clear();
     self_leaves.clear();
@@ -67,8 +69,12 @@ void color_mutual_pairs(int n_cells, std::vector<MutualPair> &pairs, std::vector
 // Mutual plan of the open-boundary U lists of a tree whose sources and targets are the same
 // points in the same order (checked by the caller): every leaf with targets must have equal
 // source and target ranges, and U must be symmetric (each leaf in its own list once). Returns
-// false (plan inactive) otherwise. The lists are not changed: the leaf pass skips U when the
-// plan is active.
-bool plan_mutual_open(const Octree &tree, const InteractionLists &lists, MutualPlan &plan);
+// false (plan inactive) otherwise. direct_max >= 0 also takes the W entries that the leaf pass
+// evaluates directly and whose dual X entries are direct too: A in W(B) with A a leaf of at
+// most direct_max points (then B in X(A), and X(A) of such a leaf is evaluated directly);
+// the plan is dropped unless W and X are exact duals there. The lists are not changed: the
+// leaf pass skips U, those W entries and the direct X entries when the plan is active
+// (plan.w_direct_max).
+bool plan_mutual_open(const Octree &tree, const InteractionLists &lists, MutualPlan &plan, int direct_max = -1);
 
 }    // namespace kifmm

@@ -266,6 +266,11 @@ void KSpaceKIFMM::gather_points()
   }
 }
 
+bool KSpaceKIFMM::distributed() const
+{
+  return !periodic && comm->nprocs > 1;
+}
+
 // All ranks' points of nonzero strength (replicated on every rank; the distributed engine
 // of the MPI issue replaces this). In serial the local arrays are used as they are.
 void KSpaceKIFMM::gather_sources()
@@ -346,7 +351,8 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
     comm_time = engine->stats().t_comm;
     nsrc = engine->stats().n_sources;
   } else {
-    // periodic: sources are the atoms of nonzero strength of all ranks, targets this rank's
+    // one rank, or periodic: sources are the atoms of nonzero strength of all ranks (all-gathered
+    // when periodic on several ranks), targets this rank's
     const double t_comm = MPI_Wtime();
     gather_sources();
     comm_time = MPI_Wtime() - t_comm;

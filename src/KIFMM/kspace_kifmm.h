@@ -49,9 +49,10 @@ class KSpaceKIFMM : public KSpace {
   std::vector<int> index;              // local atom index of each point
   std::vector<double> xyz, strength;   // positions, q or m
   std::vector<double> pot, grad;
-  // open boundaries: distributed evaluation over this communicator (world)
+  // open boundaries on more than one rank: distributed evaluation over this communicator
+  // (world); one rank uses the serial evaluate() (with its mutual near field)
   std::unique_ptr<kifmm::Communicator> kcomm;
-  bool distributed() const { return !periodic; }
+  bool distributed() const;
   // periodic: sources of all ranks (replicated when running on more than one rank)
   bool replicated = false;
   std::size_t gather_bytes = 0;    // bytes this rank sent in gather_sources

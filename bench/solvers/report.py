@@ -540,6 +540,21 @@ def summary(recs, cases):
         samp = " (sampled reference)" if ref and ref["sampled"] < ref["natoms"] else ""
         per = " periodic" if is_periodic(recs, case) else ""
         tail = "".join(f" {failed[c]}." for c in comps if c in failed)
+        # a competitor without results at this N: its ratios at the largest N where it ran
+        for c in comps:
+            if ok_runs(recs, case, n, c):
+                continue
+            n2 = [m for m in ns if ok_runs(recs, case, m, c) and ok_runs(recs, case, m, "kifmm")]
+            if not n2:
+                continue
+            m = n2[-1]
+            rs = []
+            for e in TARGETS:
+                mt = matched(recs, case, m, c, e)
+                rs.append(f"{e:.0e}: " + (fmt_ratio(mt[1] / mt[0], "~" if mt[2] else "")
+                                          if mt else "n/r"))
+            tail += (f" At N = {nlabel(m, ok_runs(recs, case, m)[0]['natoms'])}, the largest "
+                     f"where {c} ran: " + ", ".join(rs) + f" vs {c}.")
         lines.append(f"* **{case}**{per}, N = {nlabel(n, natoms)}{samp}: " + "; ".join(parts)
                      + "." + tail)
     return "\n".join(lines) + "\n"
@@ -767,6 +782,14 @@ def remaining(cfg_path, profile, recs):
             miss = [f for f in fams if not any(r["solver"] == f for r in tried)]
             if miss:
                 out.append(f"`{name}` N = {n}: no {' / '.join(miss)} runs yet")
+            latest = {}
+            for r in tried:
+                latest[r["spec"]] = r
+            stop = [r["spec"] for r in latest.values()
+                    if r["status"] in ("skipped", "timeout", "stopped")]
+            if stop:
+                out.append(f"`{name}` N = {n}: skipped or stopped for time (runs table says "
+                           f"why): {', '.join(stop)}")
     return out
 
 

@@ -112,7 +112,50 @@ template <class K> class FmmEvaluator : public Evaluator {
   void periodic_far();
   void periodic_near(bool want_pot);
   void periodic_m2l_top(int level);    // levels 1, 2: colleague slots of one parent summed
+  // M2L layout of level l: source cells (children of a target parent's colleague) and target
+  // cells (V non-empty) in slots of xhat_/yhat_ (sized here), and per parent of level l-1 the
+  // spectra of its 8 children (xtab/ytab, nullptr where absent). False if no target.
+  bool m2l_level_layout(int l, std::vector<int> &sources, std::vector<int> &targets,
+                        std::vector<const double *> &xtab, std::vector<double *> &ytab);
 };
+
+template <class K>
+bool FmmEvaluator<K>::m2l_level_layout(int l, std::vector<int> &sources, std::vector<int> &targets,
+                                       std::vector<const double *> &xtab, std::vector<double *> &ytab)
+{
+  const auto &cells = tree_.cells;
+  const int b0 = tree_.level_begin[l], b1 = tree_.level_begin[l + 1];
+  const int p0 = tree_.level_begin[l - 1], p1 = tree_.level_begin[l];
+  std::vector<int> src_slot(b1 - b0, -1), trg_slot(b1 - b0, -1);
+  sources.clear();
+  targets.clear();
+  for (int b = b0; b < b1; ++b) {
+    if (lists_.V.size(b) == 0) continue;
+    trg_slot[b - b0] = (int) targets.size();
+    targets.push_back(b);
+    for (const int *a = lists_.V.begin(b); a != lists_.V.end(b); ++a)
+      if (src_slot[*a - b0] < 0) {
+        src_slot[*a - b0] = 0;
+        sources.push_back(*a);
+      }
+  }
+  if (targets.empty()) return false;
+  std::sort(sources.begin(), sources.end());
+  for (std::size_t i = 0; i < sources.size(); ++i) src_slot[sources[i] - b0] = (int) i;
+  const int nf = fft_->nfreq();
+  xhat_.resize(sources.size() * 2 * nf);
+  yhat_.assign(targets.size() * 2 * nf, 0.0);
+  xtab.assign((std::size_t) (p1 - p0) * 8, nullptr);
+  ytab.assign((std::size_t) (p1 - p0) * 8, nullptr);
+  for (int c = b0; c < b1; ++c) {
+    const int par = cells[c].parent - p0;
+    int oct = 0;
+    while (cells[cells[c].parent].child[oct] != c) ++oct;
+    if (src_slot[c - b0] >= 0) xtab[(std::size_t) par * 8 + oct] = &xhat_[(std::size_t) src_slot[c - b0] * 32];
+    if (trg_slot[c - b0] >= 0) ytab[(std::size_t) par * 8 + oct] = &yhat_[(std::size_t) trg_slot[c - b0] * 32];
+  }
+  return true;
+}
 
 template <class K> void FmmEvaluator<K>::setup_operators(double &t_setup)
 {
@@ -240,42 +283,16 @@ template <class K> void FmmEvaluator<K>::m2l()
   std::vector<const double *> xtab;
   std::vector<double *> ytab;
   std::vector<std::pair<int, int>> pairs[27];
+  std::vector<int> sources, targets;
   for (int l = std::max(first_level(), 1); l <= tree_.depth; ++l) {
     if (opt_.periodic && l <= 2) {    // periodic_core.h
       periodic_m2l_top(l);
       continue;
     }
-    const int b0 = tree_.level_begin[l], b1 = tree_.level_begin[l + 1];
     const int p0 = tree_.level_begin[l - 1], p1 = tree_.level_begin[l];
-    // source cells (children of a target parent's colleague) and target cells (V non-empty)
-    std::vector<int> src_slot(b1 - b0, -1), trg_slot(b1 - b0, -1), sources, targets;
-    for (int b = b0; b < b1; ++b) {
-      if (lists_.V.size(b) == 0) continue;
-      trg_slot[b - b0] = (int) targets.size();
-      targets.push_back(b);
-      for (const int *a = lists_.V.begin(b); a != lists_.V.end(b); ++a)
-        if (src_slot[*a - b0] < 0) {
-          src_slot[*a - b0] = 0;
-          sources.push_back(*a);
-        }
-    }
-    if (targets.empty()) continue;
-    std::sort(sources.begin(), sources.end());
-    for (std::size_t i = 0; i < sources.size(); ++i) src_slot[sources[i] - b0] = (int) i;
+    if (!m2l_level_layout(l, sources, targets, xtab, ytab)) continue;
     const int nsrc = (int) sources.size(), ntrg = (int) targets.size();
     const std::size_t xstride = (std::size_t) nsrc * 32, ystride = (std::size_t) ntrg * 32;
-    xhat.resize((std::size_t) nsrc * 2 * nf);
-    yhat.assign((std::size_t) ntrg * 2 * nf, 0.0);
-    // per parent: 8 child spectra (parents indexed from p0)
-    xtab.assign((std::size_t) (p1 - p0) * 8, nullptr);
-    ytab.assign((std::size_t) (p1 - p0) * 8, nullptr);
-    for (int c = b0; c < b1; ++c) {
-      const int par = cells[c].parent - p0;
-      int oct = 0;
-      while (cells[cells[c].parent].child[oct] != c) ++oct;
-      if (src_slot[c - b0] >= 0) xtab[(std::size_t) par * 8 + oct] = &xhat[(std::size_t) src_slot[c - b0] * 32];
-      if (trg_slot[c - b0] >= 0) ytab[(std::size_t) par * 8 + oct] = &yhat[(std::size_t) trg_slot[c - b0] * 32];
-    }
     for (auto &v : pairs) v.clear();
     for (int pc = p0; pc < p1; ++pc) {
       const bool has_trg = [&] {

@@ -130,35 +130,13 @@ template <class K> void FmmEvaluator<K>::periodic_m2l_top(int l)
   const auto &cells = tree_.cells;
   const int nf = fft_->nfreq();
   std::vector<double> &xhat = xhat_, &yhat = yhat_;
-  const int b0 = tree_.level_begin[l], b1 = tree_.level_begin[l + 1];
   const int p0 = tree_.level_begin[l - 1], p1 = tree_.level_begin[l];
-  std::vector<int> src_slot(b1 - b0, -1), trg_slot(b1 - b0, -1), sources, targets;
-  for (int b = b0; b < b1; ++b) {
-    if (lists_.V.size(b) == 0) continue;
-    trg_slot[b - b0] = (int) targets.size();
-    targets.push_back(b);
-    for (const int *a = lists_.V.begin(b); a != lists_.V.end(b); ++a)
-      if (src_slot[*a - b0] < 0) {
-        src_slot[*a - b0] = 0;
-        sources.push_back(*a);
-      }
-  }
-  if (targets.empty()) return;
-  std::sort(sources.begin(), sources.end());
-  for (std::size_t i = 0; i < sources.size(); ++i) src_slot[sources[i] - b0] = (int) i;
+  std::vector<int> sources, targets;
+  std::vector<const double *> xtab;
+  std::vector<double *> ytab;
+  if (!m2l_level_layout(l, sources, targets, xtab, ytab)) return;
   const int nsrc = (int) sources.size(), ntrg = (int) targets.size();
   const std::size_t xstride = (std::size_t) nsrc * 32, ystride = (std::size_t) ntrg * 32;
-  xhat.resize((std::size_t) nsrc * 2 * nf);
-  yhat.assign((std::size_t) ntrg * 2 * nf, 0.0);
-  std::vector<const double *> xtab((std::size_t) (p1 - p0) * 8, nullptr);
-  std::vector<double *> ytab((std::size_t) (p1 - p0) * 8, nullptr);
-  for (int c = b0; c < b1; ++c) {
-    const int par = cells[c].parent - p0;
-    int oct = 0;
-    while (cells[cells[c].parent].child[oct] != c) ++oct;
-    if (src_slot[c - b0] >= 0) xtab[(std::size_t) par * 8 + oct] = &xhat[(std::size_t) src_slot[c - b0] * 32];
-    if (trg_slot[c - b0] >= 0) ytab[(std::size_t) par * 8 + oct] = &yhat[(std::size_t) trg_slot[c - b0] * 32];
-  }
   // groups: the set of slots (bit mask) at which a target parent sees one source parent
   std::vector<uint32_t> group_mask;
   std::vector<std::vector<std::pair<int, int>>> group_pairs;

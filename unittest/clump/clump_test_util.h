@@ -4,7 +4,10 @@
 
 #include "clump_union.h"
 
+#include "package_styles.h"
+
 #include "compute.h"
+#include "input.h"
 #include "lammps.h"
 #include "modify.h"
 
@@ -14,6 +17,7 @@
 #include <fstream>
 #include <map>
 #include <mpi.h>
+#include <sstream>
 #include <string>
 #include <unistd.h>
 #include <vector>
@@ -48,6 +52,48 @@ thermo_style custom step
 )",
                 boundary.c_str(), -half, half, -half, half, -half, half, 0.8 * half);
   return buf;
+}
+
+// A LAMMPS instance on `comm` with the package's styles (quiet unless KIFMM_TEST_VERBOSE).
+inline LAMMPS_NS::LAMMPS *make_lammps(MPI_Comm comm, const std::string &log = "none")
+{
+  std::vector<std::string> args = {"clump_test", "-log", log, "-nocite", "-echo", "none"};
+  if (!std::getenv("KIFMM_TEST_VERBOSE")) {
+    args.push_back("-screen");
+    args.push_back("none");
+  }
+  std::vector<char *> argv;
+  for (auto &a : args) argv.push_back(const_cast<char *>(a.c_str()));
+  argv.push_back(nullptr);
+  auto *lmp = new LAMMPS_NS::LAMMPS((int) args.size(), argv.data(), comm);
+  kifmm_lammps::add_package_styles(lmp);
+  return lmp;
+}
+
+// Runs the non-blank lines of `script` one by one.
+inline void run_script(LAMMPS_NS::LAMMPS *lmp, const std::string &script)
+{
+  std::istringstream in(script);
+  std::string line;
+  while (std::getline(in, line))
+    if (line.find_first_not_of(" \t") != std::string::npos) lmp->input->one(line);
+}
+
+// Molecules dim/asym/dip and a row of 8 clumps along x (IDs 100-107), one straddling x = 0
+// (the processor boundary on 2 ranks).
+inline std::string clump_row_commands(const std::string &dimer_file, const std::string &asym_file)
+{
+  std::ostringstream s;
+  s << "molecule dim " << dimer_file << "\nmolecule asym " << asym_file << "\nmolecule dip "
+    << potentials << "/dipole3.mol\n";
+  const char *shape[] = {"dim", "asym", "dip", "dim", "asym", "dip", "dim", "asym"};
+  for (int k = 0; k < 8; ++k) {
+    double x = -0.17 + 0.045 * k;
+    s << "create_atoms 0 single " << x << " " << 0.003 * (k % 3) << " " << -0.030 + 0.003 * (k % 2)
+      << " mol " << shape[k] << " " << 100 + k << " rotate " << 17 * k + 5 << " 1 " << k % 3
+      << " 2\n";
+  }
+  return s.str();
 }
 
 struct Pebble {

@@ -5,8 +5,6 @@
 // Registered to run under mpirun -np 2 (label mpi); also passes on one rank.
 #include "clump_test_util.h"
 
-#include "package_styles.h"
-
 #include "compute.h"
 #include "input.h"
 #include "modify.h"
@@ -24,29 +22,6 @@ using LAMMPS_NS::LAMMPS;
 
 namespace {
 
-LAMMPS *make_lammps(MPI_Comm comm)
-{
-  std::vector<std::string> args = {"clump_mpi", "-log", "none", "-nocite", "-echo", "none"};
-  if (!std::getenv("KIFMM_TEST_VERBOSE")) {
-    args.push_back("-screen");
-    args.push_back("none");
-  }
-  std::vector<char *> argv;
-  for (auto &a : args) argv.push_back(const_cast<char *>(a.c_str()));
-  argv.push_back(nullptr);
-  auto *lmp = new LAMMPS((int) args.size(), argv.data(), comm);
-  kifmm_lammps::add_package_styles(lmp);
-  return lmp;
-}
-
-void run_script(LAMMPS *lmp, const std::string &script)
-{
-  std::istringstream in(script);
-  std::string line;
-  while (std::getline(in, line))
-    if (line.find_first_not_of(" \t") != std::string::npos) lmp->input->one(line);
-}
-
 std::string system_script(const std::string &dimer_file, const std::string &asym_file)
 {
   std::ostringstream s;
@@ -63,16 +38,7 @@ comm_modify cutoff 0.04 vel yes
 neighbor 0.002 bin
 thermo_style custom step
 )";
-  s << "molecule dim " << dimer_file << "\nmolecule asym " << asym_file << "\nmolecule dip "
-    << potentials << "/dipole3.mol\n";
-  // a row of clumps along x, one straddling x = 0 (the processor boundary on 2 ranks)
-  const char *shape[] = {"dim", "asym", "dip", "dim", "asym", "dip", "dim", "asym"};
-  for (int k = 0; k < 8; ++k) {
-    double x = -0.17 + 0.045 * k;
-    s << "create_atoms 0 single " << x << " " << 0.003 * (k % 3) << " " << -0.030 + 0.003 * (k % 2)
-      << " mol " << shape[k] << " " << 100 + k << " rotate " << 17 * k + 5 << " 1 " << k % 3
-      << " 2\n";
-  }
+  s << clump_row_commands(dimer_file, asym_file);
   s << R"(
 pair_style gran/hooke/history 200.0 NULL 30.0 NULL 0.5 1
 pair_coeff * *

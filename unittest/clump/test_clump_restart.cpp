@@ -17,8 +17,6 @@
 //    fix recovers the clumps (count, union mass to the integration accuracy, motion).
 #include "clump_test_util.h"
 
-#include "package_styles.h"
-
 #include "atom.h"
 #include "input.h"
 #include "lammps.h"
@@ -48,29 +46,6 @@ int world_size()
   int n;
   MPI_Comm_size(MPI_COMM_WORLD, &n);
   return n;
-}
-
-LAMMPS *make_lammps(MPI_Comm comm, const std::string &log = "none")
-{
-  std::vector<std::string> args = {"clump_restart", "-log", log, "-nocite", "-echo", "none"};
-  if (!std::getenv("KIFMM_TEST_VERBOSE")) {
-    args.push_back("-screen");
-    args.push_back("none");
-  }
-  std::vector<char *> argv;
-  for (auto &a : args) argv.push_back(const_cast<char *>(a.c_str()));
-  argv.push_back(nullptr);
-  auto *lmp = new LAMMPS((int) args.size(), argv.data(), comm);
-  kifmm_lammps::add_package_styles(lmp);
-  return lmp;
-}
-
-void run_script(LAMMPS *lmp, const std::string &script)
-{
-  std::istringstream in(script);
-  std::string line;
-  while (std::getline(in, line))
-    if (line.find_first_not_of(" \t") != std::string::npos) lmp->input->one(line);
 }
 
 // file names shared by the ranks of MPI_COMM_WORLD (rank 0's scratch directory)
@@ -114,16 +89,7 @@ neighbor 0.002 bin
 timestep 1e-4
 group nothing empty
 )";
-  s << "molecule dim " << dimer_file << "\nmolecule asym " << asym_file << "\nmolecule dip "
-    << potentials << "/dipole3.mol\n";
-  // a row of clumps along x, one straddling x = 0 (the processor boundary on 2 ranks)
-  const char *shape[] = {"dim", "asym", "dip", "dim", "asym", "dip", "dim", "asym"};
-  for (int k = 0; k < 8; ++k) {
-    double x = -0.17 + 0.045 * k;
-    s << "create_atoms 0 single " << x << " " << 0.003 * (k % 3) << " " << -0.030 + 0.003 * (k % 2)
-      << " mol " << shape[k] << " " << 100 + k << " rotate " << 17 * k + 5 << " 1 " << k % 3
-      << " 2\n";
-  }
+  s << clump_row_commands(dimer_file, asym_file);
   // the dimers and the asymmetric clumps get charges too
   s << R"(
 set type 1 charge 0.25

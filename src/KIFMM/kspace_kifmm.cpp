@@ -142,10 +142,16 @@ void KSpaceKIFMM::init()
   } else {
     kifmm::Choice c = kifmm::choose_order(kernel, kset.accuracy);
     opt.order = c.order;
-    opt.leaf_size = c.leaf_size;
     est = c.measured_error;
   }
-  if (kset.leaf > 0) opt.leaf_size = kset.leaf;
+  // leaf size: given, or the tree depth of least modelled cost for this N and boundary
+  kifmm::TreeChoice tree{0, -1, 0.0};
+  if (kset.leaf > 0) {
+    opt.leaf_size = kset.leaf;
+  } else {
+    tree = kifmm::choose_tree(opt.order, (std::size_t) atom->natoms, periodic);
+    opt.leaf_size = tree.leaf_size;
+  }
   if (kset.cache_dir == "none")
     opt.cache_dir.clear();
   else
@@ -170,8 +176,12 @@ void KSpaceKIFMM::init()
     mesg += fmt::format("  kernel = {}", kifmm_lammps::kernel_name(kset.kernel));
     if (kset.kernel == LongRangeKernel::Gravity) mesg += fmt::format(" (G = {:.8g})", kset.gravity_G);
     if (kset.kernel == LongRangeKernel::Yukawa) mesg += fmt::format(" (kappa = {:.8g})", kset.kappa);
-    mesg += fmt::format("\n  order = {}, leaf size = {}\n", engine_options.order,
-                        engine_options.leaf_size);
+    mesg += fmt::format("\n  order = {}, leaf size = {}", engine_options.order, engine_options.leaf_size);
+    if (tree.depth >= 0)
+      mesg += fmt::format(" (tree depth {} for {} uniformly spread atoms, {} boundaries: least "
+                          "modelled cost)",
+                          tree.depth, atom->natoms, periodic ? "periodic" : "open");
+    mesg += "\n";
     if (est >= 0)
       mesg += fmt::format("  requested relative force error = {:.3g}, calibrated = {:.3g}\n",
                           kset.accuracy, est);
@@ -179,14 +189,10 @@ void KSpaceKIFMM::init()
       mesg += "  order set by kspace_modify: error not estimated (use check to measure it)\n";
     mesg += fmt::format("  operator cache = {}\n",
                         engine_options.cache_dir.empty() ? "memory only" : engine_options.cache_dir);
-    if (comm->nprocs > 1 && distributed())
+    if (distributed())
       mesg += fmt::format("  MPI: distributed over {} ranks (global top tree, ghost atoms near each "
-                          "rank's cells; no all-gather)\n",
-                          comm->nprocs);
-    else if (comm->nprocs > 1)
-      mesg += fmt::format("  MPI: periodic boundaries: the atoms of all {} ranks are all-gathered on "
-                          "every rank (distributed evaluation is for open boundaries only)\n",
-                          comm->nprocs);
+                          "rank's cells{}; no all-gather)\n",
+                          comm->nprocs, periodic ? ", also through the periodic faces" : "");
     utils::logmesg(lmp, mesg);
   }
 }
@@ -268,33 +274,7 @@ void KSpaceKIFMM::gather_points()
 
 bool KSpaceKIFMM::distributed() const
 {
-  return !periodic && comm->nprocs > 1;
-}
-
-// All ranks' points of nonzero strength (replicated on every rank; the distributed engine
-// of the MPI issue replaces this). In serial the local arrays are used as they are.
-void KSpaceKIFMM::gather_sources()
-{
-  replicated = comm->nprocs > 1;
-  gather_bytes = 0;
-  if (!replicated) return;
-  const int nprocs = comm->nprocs, mine = (int) index.size();
-  gather_bytes = (std::size_t) (nprocs - 1) * (32 * (std::size_t) mine + sizeof(int));
-  std::vector<int> counts(nprocs), displs(nprocs), counts3(nprocs), displs3(nprocs);
-  MPI_Allgather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, world);
-  int total = 0;
-  for (int p = 0; p < nprocs; ++p) {
-    displs[p] = total;
-    total += counts[p];
-    counts3[p] = 3 * counts[p];
-    displs3[p] = 3 * displs[p];
-  }
-  all_xyz.resize(3 * (std::size_t) total);
-  all_strength.resize(total);
-  MPI_Allgatherv(xyz.data(), 3 * mine, MPI_DOUBLE, all_xyz.data(), counts3.data(),
-                 displs3.data(), MPI_DOUBLE, world);
-  MPI_Allgatherv(strength.data(), mine, MPI_DOUBLE, all_strength.data(), counts.data(),
-                 displs.data(), MPI_DOUBLE, world);
+  return comm->nprocs > 1;
 }
 
 void KSpaceKIFMM::compute(int eflag, int vflag)
@@ -344,22 +324,18 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   double comm_time = 0;
   std::size_t nsrc = 0;    // sources of all ranks (same value on every rank)
   if (distributed()) {
-    // open boundaries: each rank passes its own atoms (collective; ghosts are exchanged inside)
+    // each rank passes its own atoms (collective; ghosts are exchanged inside)
     check_memory(n);
     engine->evaluate_distributed(*kcomm, n, xyz.data(), strength.data(),
                                  want_potential ? pot.data() : nullptr, grad.data());
     comm_time = engine->stats().t_comm;
     nsrc = engine->stats().n_sources;
   } else {
-    // one rank, or periodic: sources are the atoms of nonzero strength of all ranks (all-gathered
-    // when periodic on several ranks), targets this rank's
-    const double t_comm = MPI_Wtime();
-    gather_sources();
-    comm_time = MPI_Wtime() - t_comm;
-    nsrc = source_strength().size();
+    // one rank: its atoms are the sources and the targets
+    nsrc = strength.size();
     check_memory(nsrc);
     if (nsrc > 0)
-      engine->evaluate(nsrc, source_xyz().data(), source_strength().data(), n, xyz.data(),
+      engine->evaluate(nsrc, xyz.data(), strength.data(), n, xyz.data(),
                        want_potential ? pot.data() : nullptr, grad.data());
   }
   const kifmm::Stats no_work;
@@ -416,7 +392,7 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   }
 
   run_timing.add(phases, comm_time, MPI_Wtime() - t_start, n,
-                 distributed() ? engine->stats().comm_bytes : gather_bytes);
+                 distributed() ? engine->stats().comm_bytes : 0);
   if (!reported_first_evaluation) report_first_evaluation();
   report_coincident_pairs(nsrc > 0 ? phases.coincident_pairs : 0);
   if (kset.check_every > 0 && update->ntimestep % kset.check_every == 0) check_error();
@@ -440,19 +416,16 @@ void KSpaceKIFMM::per_atom_virial(double cf, double center[3])
   MPI_Allreduce(hi, ghi, 3, MPI_DOUBLE, MPI_MAX, world);
   for (int d = 0; d < 3; ++d) center[d] = 0.5 * (glo[d] + ghi[d]);
 
-  // all sources, strengths s_j (x_j,a - c_a): distributed (each rank its own atoms), or the
-  // all-gathered sources (periodic path)
+  // sources: each rank its own atoms, strengths s_j (x_j,a - c_a) (open boundaries only)
   const bool dist = distributed();
-  const std::vector<double> &all_xyz = dist ? xyz : source_xyz(), &all_s = dist ? strength : source_strength();
-  const std::size_t nsrc = all_s.size();
-  std::vector<double> moment(nsrc), g(3 * n);
+  std::vector<double> moment(n), g(3 * n);
   for (int a = 0; a < 3; ++a) {
-    for (std::size_t j = 0; j < nsrc; ++j) moment[j] = all_s[j] * (all_xyz[3 * j + a] - center[a]);
+    for (std::size_t j = 0; j < n; ++j) moment[j] = strength[j] * (xyz[3 * j + a] - center[a]);
     std::fill(g.begin(), g.end(), 0.0);
     if (dist)
       engine->evaluate_distributed(*kcomm, n, xyz.data(), moment.data(), nullptr, g.data());
     else
-      engine->evaluate(nsrc, all_xyz.data(), moment.data(), n, xyz.data(), nullptr, g.data());
+      engine->evaluate(n, xyz.data(), moment.data(), n, xyz.data(), nullptr, g.data());
     for (std::size_t k = 0; k < n; ++k) {
       const int i = index[k];
       const double s = strength[k];
@@ -478,9 +451,8 @@ void KSpaceKIFMM::per_atom_virial(double cf, double center[3])
 void KSpaceKIFMM::check_error()
 {
   // exact gradient on a random sample of this rank's points, by direct summation over all
-  // sources; error = ||F_fmm - F_exact|| / ||F_exact|| over the sample
+  // sources (periodic: the Ewald sum); error = ||F_fmm - F_exact|| / ||F_exact|| over the sample
   const std::size_t n = index.size();
-  const std::vector<double> &all_xyz = source_xyz(), &all_s = source_strength();    // periodic
   bigint ntotal = 0, nmine = (bigint) n;
   MPI_Allreduce(&nmine, &ntotal, 1, MPI_LMP_BIGINT, MPI_SUM, world);
   std::vector<std::size_t> sample;
@@ -501,6 +473,7 @@ void KSpaceKIFMM::check_error()
     for (int d = 0; d < 3; ++d) txyz[3 * k + d] = xyz[3 * sample[k] + d];
   if (distributed()) {
     // the samples of all ranks on every rank (small); each rank sums its own atoms on them
+    // (both references are linear in the sources)
     int mine = (int) sample.size(), nprocs = comm->nprocs;
     std::vector<int> counts(nprocs), displs(nprocs);
     MPI_Allgather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, world);
@@ -514,7 +487,12 @@ void KSpaceKIFMM::check_error()
     std::vector<double> all_t(3 * (std::size_t) total), all_g(3 * (std::size_t) total, 0.0);
     MPI_Allgatherv(txyz.data(), 3 * mine, MPI_DOUBLE, all_t.data(), counts.data(), displs.data(),
                    MPI_DOUBLE, world);
-    if (total > 0 && !strength.empty())
+    if (total > 0 && !strength.empty() && periodic)
+      kifmm::periodic_direct_sum(engine->kernel(), engine->options().root_center,
+                                 engine->options().root_half_width, strength.size(), xyz.data(),
+                                 strength.data(), (std::size_t) total, all_t.data(), nullptr,
+                                 all_g.data());
+    else if (total > 0 && !strength.empty())
       kifmm::direct_sum(engine->kernel(), strength.size(), xyz.data(), strength.data(),
                         (std::size_t) total, all_t.data(), nullptr, all_g.data());
     if (total > 0)
@@ -523,11 +501,11 @@ void KSpaceKIFMM::check_error()
               all_g.begin() + 3 * ((std::size_t) offset + sample.size()), exact.begin());
   } else if (!sample.empty() && periodic)    // Ewald reference (engine/periodic.h)
     kifmm::periodic_direct_sum(engine->kernel(), engine->options().root_center,
-                               engine->options().root_half_width, all_s.size(), all_xyz.data(),
-                               all_s.data(), sample.size(), txyz.data(), nullptr, exact.data());
+                               engine->options().root_half_width, strength.size(), xyz.data(),
+                               strength.data(), sample.size(), txyz.data(), nullptr, exact.data());
   else if (!sample.empty())
-    kifmm::direct_sum(engine->kernel(), all_s.size(), all_xyz.data(), all_s.data(), sample.size(),
-                      txyz.data(), nullptr, exact.data());
+    kifmm::direct_sum(engine->kernel(), strength.size(), xyz.data(), strength.data(),
+                      sample.size(), txyz.data(), nullptr, exact.data());
   double sums[2] = {0, 0};
   for (std::size_t k = 0; k < sample.size(); ++k) {
     const double s = strength[sample[k]];
@@ -559,7 +537,7 @@ void KSpaceKIFMM::report_first_evaluation()
                    "  precompute {:.3g} s, operators {:.3g} MB, tree {:.3g} MB\n",
                    s.n_sources, s.depth, s.n_cells, s.n_leaves, s.coincident_pairs,
                    s.t_precompute, s.operator_bytes / 1048576.0, s.tree_bytes / 1048576.0);
-  if (comm->nprocs > 1 && distributed()) {
+  if (distributed()) {
     // load and halo of the distributed evaluation, min/avg/max over ranks
     double mine[3] = {(double) index.size(), (double) s.n_ghosts, (double) s.comm_bytes};
     double lo[3], hi[3], sum[3];

@@ -2,8 +2,8 @@
 // Kernels: coulomb (atom q, qqrd2e), gravity (mass, G, attractive), yukawa (screened coulomb
 // as pair coul/debye). Open boundaries, or p p p with a cubic box (kspace_kifmm_periodic.cpp). Thin adapter: collects the atoms of nonzero strength,
 // calls kifmm::Evaluator, scatters forces, energy and virial. See doc/kspace_kifmm.rst.
-// MPI: open boundaries use the engine's distributed evaluation (each rank passes its own
-// atoms; no all-gather); periodic boundaries still all-gather the sources.
+// MPI: on more than one rank the engine's distributed evaluation (each rank passes its own
+// atoms; no all-gather), open or periodic boundaries.
 #pragma once
 
 #include "communicator.h"
@@ -49,17 +49,10 @@ class KSpaceKIFMM : public KSpace {
   std::vector<int> index;              // local atom index of each point
   std::vector<double> xyz, strength;   // positions, q or m
   std::vector<double> pot, grad;
-  // open boundaries on more than one rank: distributed evaluation over this communicator
-  // (world); one rank uses the serial evaluate() (with its mutual near field)
+  // more than one rank: distributed evaluation over this communicator (world), open or
+  // periodic boundaries; one rank uses the serial evaluate() (with its mutual near field)
   std::unique_ptr<kifmm::Communicator> kcomm;
   bool distributed() const;
-  // periodic: sources of all ranks (replicated when running on more than one rank)
-  bool replicated = false;
-  std::size_t gather_bytes = 0;    // bytes this rank sent in gather_sources
-  std::vector<double> all_xyz, all_strength;
-  const std::vector<double> &source_xyz() const { return replicated ? all_xyz : xyz; }
-  const std::vector<double> &source_strength() const { return replicated ? all_strength : strength; }
-  void gather_sources();
 
   double strength_of(int i) const;
   double force_prefactor() const;    // F_i = prefactor * s_i * grad_i

@@ -1,8 +1,9 @@
 // Distributed evaluation (Evaluator::evaluate_distributed over MPI) equals the serial
 // evaluation of all points to 1e-10 relative, for uniform, clustered and dipole sets, several
 // partitions (slabs with an empty rank, spatial blocks, random, everything on one rank) and top
-// tree levels. Run under mpirun -np 1..4 (ctest label mpi); on one rank it checks the serial
-// communicator path.
+// tree levels; open and periodic boundaries (Periodic*: the root is the periodic cell, ghosts
+// wrap through its faces, the lattice operator acts on the reduced root density). Run under
+// mpirun -np 1..4 (ctest label mpi); on one rank it checks the serial communicator path.
 #include "fmm_core.h"
 #include "kernels.h"
 #include "kifmm.h"
@@ -68,15 +69,21 @@ struct Result {
   std::size_t ghosts = 0, own = 0, comm_bytes = 0;
 };
 
+// periodic_half > 0: periodic boundaries, the cell [-periodic_half, periodic_half]^3
 template <class K>
 Result compare(const K &k, const kifmm::KernelSpec &spec, const Points &all, const Partition &part, int top_level,
-               int leaf = 24, int order = 6)
+               int leaf = 24, int order = 6, double periodic_half = 0.0)
 {
   const int me = rank_of_world(), np = size_of_world();
   kifmm::Options o;
   o.order = order;
   o.leaf_size = leaf;
   o.top_level = top_level;
+  if (periodic_half > 0) {
+    o.periodic = true;
+    o.fixed_root = true;
+    o.root_half_width = periodic_half;
+  }
   kifmm::FmmEvaluator<K> serial(k, spec, o), dist(k, spec, o);
   const std::size_t n = all.size();
   std::vector<double> ps(n), gs(3 * n);
@@ -125,15 +132,42 @@ Points with_zero_charges(Points p)
 const Partition kPartitions[] = {slabs_last_empty, blocks, random_owner, all_on_last};
 const char *kPartitionNames[] = {"slabs (last rank empty)", "blocks", "random", "all on the last rank"};
 
-void check_all_partitions(const Points &p, int top_level, int leaf = 24)
+void check_all_partitions(const Points &p, int top_level, int leaf = 24, double periodic_half = 0.0)
 {
   kifmm::LaplaceKernel k;
   kifmm::KernelSpec spec;
   for (int j = 0; j < 4; ++j) {
-    Result r = compare(k, spec, p, kPartitions[j], top_level, leaf);
+    Result r = compare(k, spec, p, kPartitions[j], top_level, leaf, 6, periodic_half);
     EXPECT_LE(r.grad, 1e-10) << kPartitionNames[j] << ", top level " << top_level;
     EXPECT_LE(r.pot, 1e-10) << kPartitionNames[j] << ", top level " << top_level;
   }
+}
+
+Points joined(Points a, const Points &b)
+{
+  a.xyz.insert(a.xyz.end(), b.xyz.begin(), b.xyz.end());
+  a.q.insert(a.q.end(), b.q.begin(), b.q.end());
+  return a;
+}
+
+Points neutral(Points p)
+{
+  double s = 0;
+  for (double q : p.q) s += q;
+  for (double &q : p.q) q -= s / p.q.size();
+  return p;
+}
+
+// Periodic cell [-1, 1]^3: two dense clusters (sigma 2e-4) centred on the faces x = -1 and
+// x = +1 (each straddles the boundary: its halves are neighbours only through the face), a
+// sparse uniform halo, and some points given outside the cell (wrapped by the engine).
+Points periodic_clusters(std::size_t n, unsigned seed)
+{
+  Points c = two_clusters(n, seed);
+  for (double &x : c.xyz) x *= 0.2;
+  Points p = joined(c, uniform_cube(n / 4, seed + 1));
+  for (std::size_t i = 0; i < p.size(); i += 11) p.xyz[3 * i + 1] += (i % 2 ? 2.0 : -2.0);
+  return p;
 }
 
 }    // namespace
@@ -218,6 +252,69 @@ TEST(Distributed, GhostsAreLocal)
   if (rank_of_world() == 0)
     printf("  max over ranks: own points %zu, ghost points %zu (others' points %.0f), bytes sent %zu\n", r.own,
            r.ghosts, others, r.comm_bytes);
+  EXPECT_GT(r.comm_bytes, 0u);
+}
+
+// ---------------------------------------------------------------- periodic boundaries
+
+TEST(Distributed, PeriodicUniformEqualsSerial)
+{
+  Points p = with_zero_charges(neutral(uniform_cube(3000, 31)));
+  for (int top : {0, 2, 3, 4}) check_all_partitions(p, top, 24, 1.0);
+}
+
+TEST(Distributed, PeriodicClustersEqualSerial)
+{
+  Points p = neutral(periodic_clusters(2400, 32));
+  for (int top : {0, 2, 3}) check_all_partitions(p, top, 24, 1.0);
+  check_all_partitions(p, 0, 8, 1.0);    // small leaves: deep local subtrees at the faces
+}
+
+// net charge: the uniform background term, whose moments are summed over ranks
+TEST(Distributed, PeriodicNetChargeAndDipolesEqualSerial)
+{
+  Points p = uniform_cube(2000, 33);
+  for (double &q : p.q) q = std::fabs(q);
+  for (int top : {0, 3}) check_all_partitions(p, top, 24, 1.0);
+  for (int top : {0, 2}) check_all_partitions(dipoles(1000, 34), top, 24, 1.0);
+}
+
+TEST(Distributed, PeriodicFewPointsEqualSerial)
+{
+  for (std::size_t n : {5, 40, 200}) check_all_partitions(neutral(uniform_cube(n, 35)), 0, 24, 1.0);
+}
+
+TEST(Distributed, PeriodicYukawaEqualsSerial)
+{
+  kifmm::KernelSpec spec;
+  spec.type = kifmm::KernelType::Yukawa;
+  spec.kappa = 2.0;
+  kifmm::YukawaKernel k{2.0};
+  Points p = periodic_clusters(2400, 36);
+  for (int j = 0; j < 4; ++j) {
+    Result r = compare(k, spec, p, kPartitions[j], j % 2 ? 3 : 0, 24, 6, 1.0);
+    EXPECT_LE(r.grad, 1e-10) << kPartitionNames[j];
+    EXPECT_LE(r.pot, 1e-10) << kPartitionNames[j];
+  }
+}
+
+// No all-gather with periodic boundaries either: slabs get the frontier cells next to them,
+// through the periodic faces too, not every other rank's points.
+TEST(Distributed, PeriodicGhostsAreLocal)
+{
+  const int np = size_of_world();
+  if (np < 3) GTEST_SKIP() << "needs 3 or more ranks";
+  kifmm::LaplaceKernel k;
+  kifmm::KernelSpec spec;
+  Points p = neutral(uniform_cube(8000, 37));
+  Result r = compare(k, spec, p, slabs_last_empty, 4, 32, 6, 1.0);
+  EXPECT_LE(r.grad, 1e-10);
+  EXPECT_LE(r.pot, 1e-10);
+  const double others = 8000.0 - 8000.0 / (np - 1);
+  EXPECT_LT((double) r.ghosts, 0.75 * others) << "ghosts " << r.ghosts << " of " << others;
+  if (rank_of_world() == 0)
+    printf("  periodic, max over ranks: own points %zu, ghost points %zu (others' points %.0f), bytes sent %zu\n",
+           r.own, r.ghosts, others, r.comm_bytes);
   EXPECT_GT(r.comm_bytes, 0u);
 }
 

@@ -5,6 +5,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -56,18 +57,35 @@ struct Timer {
   ~Timer() { acc += omp_get_wtime() - t0; }
 };
 
-// frontier cells (top cells without children) touching cell x: descend the top tree
-template <class F> void touching(const TopTree &top, const Cell &x, F &&visit)
+// root shifts under which cells can be neighbours: none (open), or the 27 images of the
+// periodic cell (a cell and an image of it at shift n, n in {-1,0,1}^3)
+struct Shifts {
+  std::vector<std::array<signed char, 3>> s;
+  explicit Shifts(bool periodic)
+  {
+    const int r = periodic ? 1 : 0;
+    for (int x = -r; x <= r; ++x)
+      for (int y = -r; y <= r; ++y)
+        for (int z = -r; z <= r; ++z) s.push_back({(signed char) x, (signed char) y, (signed char) z});
+  }
+};
+
+// frontier cells (top cells without children) touching cell x, some image of them with
+// periodic shifts: descend the top tree once per shift
+template <class F> void touching(const TopTree &top, const Shifts &shifts, const Cell &x, F &&visit)
 {
-  std::vector<int> stack{0};
-  while (!stack.empty()) {
-    const int c = stack.back();
-    stack.pop_back();
-    const Cell &C = top.cells[c];
-    if (!cells_adjacent(C, x)) continue;
-    if (C.n_children == 0) visit(c);
-    else
-      for (int k = 0; k < C.n_children; ++k) stack.push_back(C.first_child + k);
+  std::vector<int> stack;
+  for (const auto &sh : shifts.s) {
+    stack.assign(1, 0);
+    while (!stack.empty()) {
+      const int c = stack.back();
+      stack.pop_back();
+      const Cell &C = top.cells[c];
+      if (!cells_adjacent_shifted(C, sh.data(), x)) continue;
+      if (C.n_children == 0) visit(c);
+      else
+        for (int k = 0; k < C.n_children; ++k) stack.push_back(C.first_child + k);
+    }
   }
 }
 
@@ -88,7 +106,7 @@ template <class F> void below(const TopTree &top, int c, F &&visit)
 }    // namespace
 
 void distributed_setup(Communicator &comm, int top_level, int leaf_size, int max_depth, int nsurf, bool pow2_root,
-                       const RootBox *fixed_root, std::size_t n, const double *xyz, const double *q,
+                       const RootBox *fixed_root, bool periodic, std::size_t n, const double *xyz, const double *q,
                        DistributedData &out)
 {
   out = DistributedData();
@@ -242,37 +260,43 @@ void distributed_setup(Communicator &comm, int top_level, int leaf_size, int max
   out.responsible.assign(nf, 0);
   for (int f = 0; f < nf; ++f) out.responsible[f] = ostart[f + 1] > ostart[f] && occ[ostart[f]] == me;
 
-  // frontier cells whose points this rank needs (doc/design.md: rules i-iii)
+  // frontier cells whose points this rank needs (doc/design.md: rules i-iii); periodic: the
+  // neighbours through the cell's faces too (images)
+  const Shifts shifts(periodic);
   std::vector<char> need(nf, 0), own_top(ntop, 0);
   auto mark = [&](int c) { need[findex[c]] = 1; };
   for (int f : mine) {
     int c = out.frontier[f];
-    touching(top, top.cells[c], mark);    // (i)
+    touching(top, shifts, top.cells[c], mark);    // (i)
     for (; c >= 0 && !own_top[c]; c = top.cells[c].parent) own_top[c] = 1;
   }
   for (int c = 1; c < ntop; ++c) {    // (ii) coarser top leaves touching parent(C)
     if (!own_top[c]) continue;
     const Cell &C = top.cells[c];
-    touching(top, top.cells[C.parent], [&](int a) {
+    touching(top, shifts, top.cells[C.parent], [&](int a) {
       if (top.cells[a].level < C.level) mark(a);
     });
   }
   // (iii) top cells A whose parent touches an own frontier cell C_f, finer than C_f, not touching
   // it, with at most nsurf sources: W lists of leaves in C_f take their particles (direct sum)
+  // (periodic: per image of the top tree, A and its children under the same shift)
+  std::vector<int> st;
   for (int f : mine) {
     const Cell &B = top.cells[out.frontier[f]];
-    std::vector<int> st{0};
-    while (!st.empty()) {
-      const int a = st.back();
-      st.pop_back();
-      const Cell &A = top.cells[a];
-      if (!cells_adjacent(A, B)) continue;
-      for (int k = 0; k < A.n_children; ++k) {
-        const int d = A.first_child + k;
-        const Cell &D = top.cells[d];
-        if (D.gsrc == 0) continue;
-        if (cells_adjacent(D, B)) st.push_back(d);
-        else if (D.level > B.level && (int) D.gsrc <= nsurf) below(top, d, mark);
+    for (const auto &sh : shifts.s) {
+      st.assign(1, 0);
+      while (!st.empty()) {
+        const int a = st.back();
+        st.pop_back();
+        const Cell &A = top.cells[a];
+        if (!cells_adjacent_shifted(A, sh.data(), B)) continue;
+        for (int k = 0; k < A.n_children; ++k) {
+          const int d = A.first_child + k;
+          const Cell &D = top.cells[d];
+          if (D.gsrc == 0) continue;
+          if (cells_adjacent_shifted(D, sh.data(), B)) st.push_back(d);
+          else if (D.level > B.level && (int) D.gsrc <= nsurf) below(top, d, mark);
+        }
       }
     }
   }

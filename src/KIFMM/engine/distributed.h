@@ -39,8 +39,11 @@ int choose_top_level(uint64_t npoints, int nranks, int nsurf, int max_depth, int
 // down to that level exactly (tests). pow2_root rounds the
 // root half-width up to a power of two (kernels with level-dependent operators), fixed_root
 // replaces the bounding cube. nsurf: equivalent surface size (W-list direct threshold).
+// periodic: fixed_root is the periodic cell (points already wrapped into it); cells are
+// neighbours also through the cell's faces (images with root shifts in {-1,0,1}^3), so the
+// ghost requests wrap around the boundary.
 void distributed_setup(Communicator &comm, int top_level, int leaf_size, int max_depth, int nsurf, bool pow2_root,
-                       const RootBox *fixed_root, std::size_t n, const double *xyz, const double *q,
+                       const RootBox *fixed_root, bool periodic, std::size_t n, const double *xyz, const double *q,
                        DistributedData &out);
 
 // Keep only the targets with input index < n_keep in the sorted target order (ranges remapped;

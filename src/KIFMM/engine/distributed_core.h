@@ -2,6 +2,10 @@
 // does not depend on the kernel (root, top tree, ghost import) is distributed.h/.cpp; here:
 // the local tree over own + ghost points with the global top copied in, the exchange of the
 // frontier densities, the top M2M, and the usual passes for this rank's targets.
+// Periodic boundaries: the root is the periodic cell (every rank wraps its own points into it),
+// ghosts are requested through the cell's faces too, the local lists are the periodic ones
+// (image shifts), the root's lattice operator acts on the reduced root density (the same on
+// every rank) and the moments of the Laplace background term are summed over ranks.
 #pragma once
 
 #include <stdexcept>
@@ -12,7 +16,6 @@ template <class K>
 void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, const double *xyz, const double *q,
                                            double *pot, double *grad)
 {
-  if (opt_.periodic) throw std::invalid_argument("kifmm: evaluate_distributed supports open boundaries only");
   stats_ = Stats{};
   stats_.n_targets = n;
   if (pot) std::fill(pot, pot + n, 0.0);
@@ -24,9 +27,13 @@ void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, co
     for (int d = 0; d < 3; ++d) fixed.center[d] = opt_.root_center[d];
     fixed.half_width = opt_.root_half_width;
   }
+  if (opt_.periodic) {    // own points wrapped into the cell (as periodic_wrap does in serial)
+    const double *sxyz = xyz;
+    periodic_wrap(n, sxyz, n, xyz);
+  }
   DistributedData dd;
   distributed_setup(comm, opt_.top_level, opt_.leaf_size, opt_.max_depth, nsurf_, !level_independent_operators<K>(),
-                    opt_.fixed_root ? &fixed : nullptr, n, xyz, q, dd);
+                    opt_.fixed_root ? &fixed : nullptr, opt_.periodic, n, xyz, q, dd);
   stats_.t_comm = dd.t_comm;
   stats_.ghost_bytes = dd.ghost_bytes;
   stats_.top_level = dd.top.top_level;
@@ -62,7 +69,8 @@ void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, co
   sorted_copies(ns, sxyz, sq, n, xyz);
   const double t1 = omp_get_wtime();
   stats_.t_tree = t1 - t - dd.t_comm;
-  build_interaction_lists(tree_, lists_);
+  if (opt_.periodic) build_periodic_interaction_lists(tree_, lists_, plists_);
+  else build_interaction_lists(tree_, lists_);
   const double t2 = omp_get_wtime();
   stats_.t_lists = t2 - t1;
   stats_.depth = tree_.depth;
@@ -95,6 +103,8 @@ void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, co
     for (const CellList *lst : {&lists_.V, &lists_.W})
       for (int a : lst->idx)
         if (tree_.top_index[a] < 0) up_mask_[a] = 1;
+    for (int a : plists_.W.idx)    // periodic W entries with an image shift (else empty)
+      if (opt_.periodic && tree_.top_index[a] < 0) up_mask_[a] = 1;
     for (std::size_t f = 0; f < dd.frontier.size(); ++f)
       if (dd.responsible[f]) up_mask_[local_of[dd.frontier[f]]] = 1;
     for (std::size_t c = 1; c < nc; ++c)
@@ -134,11 +144,22 @@ void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, co
   const double t5 = omp_get_wtime();
   stats_.t_m2l = t5 - t4;
   p2l();
+  if (opt_.periodic) {
+    // own sources come first in the local source array: the background moments of this rank's
+    // sources, summed over ranks
+    std::size_t own_src = 0;
+    for (std::size_t i = 0; i < n; ++i) own_src += q[i] != 0.0;
+    periodic_far(own_src);
+    const double tm = omp_get_wtime();
+    comm.allreduce_sum(periodic_moments_, 5);
+    stats_.t_comm += omp_get_wtime() - tm;
+  }
   const double t6 = omp_get_wtime();
   stats_.t_wx = t6 - t5;
   downward();
   stats_.t_downward = omp_get_wtime() - t6;
   leaf_pass(pot != nullptr, grad != nullptr);
+  if (opt_.periodic) periodic_near(pot != nullptr);
 #pragma omp parallel for schedule(static)
   for (std::size_t i = 0; i < n; ++i) {
     const std::size_t j = tree_.trg_order[i];

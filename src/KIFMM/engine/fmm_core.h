@@ -109,7 +109,9 @@ template <class K> class FmmEvaluator : public Evaluator {
   double periodic_quad_ = 0.0, periodic_moments_[5] = {0, 0, 0, 0, 0};    // Laplace background part
   int first_level() const { return opt_.periodic ? 0 : 2; }    // first level with expansions
   void periodic_wrap(std::size_t ns, const double *&sxyz, std::size_t nt, const double *&txyz);
-  void periodic_far();
+  // own_sources: sources with sorted input index below it enter the background moments
+  // (distributed: this rank's own sources; the moments are then summed over ranks)
+  void periodic_far(std::size_t own_sources = SIZE_MAX);
   void periodic_near(bool want_pot);
   void periodic_m2l_top(int level);    // levels 1, 2: colleague slots of one parent summed
   // M2L layout of level l: source cells (children of a target parent's colleague) and target

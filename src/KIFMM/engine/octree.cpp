@@ -132,6 +132,20 @@ bool cells_adjacent(const Cell &a0, const Cell &b0)
   return true;
 }
 
+bool cells_adjacent_shifted(const Cell &a, const signed char sa[3], const Cell &b)
+{
+  const int lf = std::max(a.level, b.level);
+  const int64_t ka = int64_t(1) << (lf - a.level), kb = int64_t(1) << (lf - b.level);
+  const int64_t period = int64_t(1) << lf;
+  const int64_t ax[3] = {a.ix, a.iy, a.iz}, bx[3] = {b.ix, b.iy, b.iz};
+  for (int d = 0; d < 3; ++d) {
+    const int64_t alo = ax[d] * ka + sa[d] * period, ahi = alo + ka;
+    const int64_t blo = bx[d] * kb, bhi = blo + kb;
+    if (alo > bhi || blo > ahi) return false;
+  }
+  return true;
+}
+
 namespace {
 
 // Stable partition of keys[b..e) (and the parallel index array) into the 8 octants of the

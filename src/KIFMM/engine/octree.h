@@ -89,4 +89,8 @@ void radix_sort_keys(std::vector<uint64_t> &keys, std::vector<uint32_t> &order);
 // True when closed cells a and b touch or overlap (any level).
 bool cells_adjacent(const Cell &a, const Cell &b);
 
+// Periodic trees (root = periodic cell): closed cell a moved by shift root periods (each in
+// {-1, 0, 1}) and cell b touch or overlap.
+bool cells_adjacent_shifted(const Cell &a, const signed char shift[3], const Cell &b);
+
 }    // namespace kifmm

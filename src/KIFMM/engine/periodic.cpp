@@ -42,21 +42,6 @@ struct Entry {
   signed char s[3];
 };
 
-// Closed cells a (shifted by sa root periods) and b (unshifted) touch or overlap.
-bool adjacent_img(const Cell &a, const signed char sa[3], const Cell &b)
-{
-  const int lf = std::max(a.level, b.level);
-  const int64_t ka = int64_t(1) << (lf - a.level), kb = int64_t(1) << (lf - b.level);
-  const int64_t period = int64_t(1) << lf;
-  const int64_t ax[3] = {a.ix, a.iy, a.iz}, bx[3] = {b.ix, b.iy, b.iz};
-  for (int d = 0; d < 3; ++d) {
-    const int64_t alo = ax[d] * ka + sa[d] * period, ahi = alo + ka;
-    const int64_t blo = bx[d] * kb, bhi = blo + kb;
-    if (alo > bhi || blo > ahi) return false;
-  }
-  return true;
-}
-
 bool zero_shift(const signed char s[3])
 {
   return s[0] == 0 && s[1] == 0 && s[2] == 0;
@@ -138,19 +123,19 @@ void build_periodic_interaction_lists(const Octree &tree, InteractionLists &list
                         dz = D.iz + ps[2] * period - B.iz;
           if (dx >= -1 && dx <= 1 && dy >= -1 && dy <= 1 && dz >= -1 && dz <= 1)
             col[(dx + 1) * 9 + (dy + 1) * 3 + (dz + 1)] = d;
-          else if (D.n_src() > 0 && B.n_trg() > 0)
+          else if (D.gsrc > 0 && B.n_trg() > 0)
             V[b].push_back({d, {(signed char) ps[0], (signed char) ps[1], (signed char) ps[2]}});
         }
       }
       auto consider = [&](const Entry &a) {
-        if (adjacent_img(cells[a.cell], a.s, B)) coarse_adj[b].push_back(a);
+        if (cells_adjacent_shifted(cells[a.cell], a.s, B)) coarse_adj[b].push_back(a);
         else if (B.n_trg() > 0) X[b].push_back(a);
       };
       for (const Entry &a : coarse_adj[p]) consider(a);
       for (int s = 0; s < 27; ++s) {
         const int pc = lists.colleagues[p][s];
         if (s == 13 || pc < 0) continue;
-        if (cells[pc].leaf() && cells[pc].n_src() > 0) {
+        if (cells[pc].leaf() && cells[pc].gsrc > 0) {
           int ps[3];
           colleague_shift(P, s, ps);
           consider({pc, {(signed char) ps[0], (signed char) ps[1], (signed char) ps[2]}});
@@ -168,7 +153,7 @@ void build_periodic_interaction_lists(const Octree &tree, InteractionLists &list
     std::vector<Entry> stack;
     for (int s = 0; s < 27; ++s) {
       const int c = lists.colleagues[b][s];
-      if (c < 0 || cells[c].n_src() == 0) continue;
+      if (c < 0 || cells[c].gsrc == 0) continue;
       int cs[3];
       colleague_shift(B, s, cs);
       const Entry e{c, {(signed char) cs[0], (signed char) cs[1], (signed char) cs[2]}};
@@ -182,8 +167,8 @@ void build_periodic_interaction_lists(const Octree &tree, InteractionLists &list
       for (int k = 0; k < C.n_children; ++k) {
         const Entry d{C.first_child + k, {e.s[0], e.s[1], e.s[2]}};
         const Cell &D = cells[d.cell];
-        if (D.n_src() == 0) continue;
-        if (!adjacent_img(D, d.s, B)) W[b].push_back(d);
+        if (D.gsrc == 0) continue;
+        if (!cells_adjacent_shifted(D, d.s, B)) W[b].push_back(d);
         else if (D.leaf()) u.push_back(d);
         else stack.push_back(d);
       }

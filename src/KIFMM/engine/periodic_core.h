@@ -40,7 +40,7 @@ void FmmEvaluator<K>::periodic_wrap(std::size_t ns, const double *&sxyz, std::si
   }
 }
 
-template <class K> void FmmEvaluator<K>::periodic_far()
+template <class K> void FmmEvaluator<K>::periodic_far(std::size_t own_sources)
 {
   const auto &cells = tree_.cells;
   const double L = 2.0 * tree_.root.half_width;
@@ -109,6 +109,7 @@ template <class K> void FmmEvaluator<K>::periodic_far()
   if (periodic_quad_ != 0.0) {
     const double *c = tree_.root.center;
     for (std::size_t j = 0; j < sq_.size(); ++j) {
+      if (tree_.src_order[j] >= own_sources) continue;
       const double dx = sx_[j] - c[0], dy = sy_[j] - c[1], dz = sz_[j] - c[2];
       periodic_moments_[0] += sq_[j];
       periodic_moments_[1] += sq_[j] * dx;
@@ -328,7 +329,7 @@ template <class K> void FmmEvaluator<K>::periodic_near(bool want_pot)
       for (int e = plists_.W.begin(b); e < plists_.W.end(b); ++e) {
         shifted(plists_.W.shift_of(e));
         const int a = plists_.W.idx[e];
-        if ((int) cells[a].n_src() <= nsurf_) {
+        if ((int) cells[a].gsrc <= nsurf_) {
           direct(cells[a]);
         } else {
           cell_surface(a, inner_, surf);

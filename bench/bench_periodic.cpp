@@ -1,12 +1,18 @@
 // Cost of a periodic (p p p) evaluation relative to a free-space one at the same N and order,
 // measured in the same run as CPU time of the process (clock_gettime PROCESS_CPUTIME; run with
-// OMP_NUM_THREADS=1 on a shared machine); the two are timed alternately, minimum of --reps. Uniform random charges (neutral) in the cube
-// [-1,1]^3; the free-space evaluator gets the same cube as fixed root (same octree). Each
-// evaluator uses the engine's default leaf size for the order unless --leaves is given (then
-// every leaf size is timed and the fastest of each mode is reported). Potential + gradient.
+// OMP_NUM_THREADS=1 on a shared machine), minimum of --reps. Uniform random charges (neutral)
+// in the cube [-1,1]^3; the free-space evaluator gets the same cube as fixed root. Potential +
+// gradient, sources = targets.
+// Default: four evaluators timed alternately (open and periodic, each at the leaf size of the
+// cost model, choose_tree, as kspace_style kifmm uses it, and at the per-order calibrated leaf
+// size of the engine default): the table gives the periodic/open ratio at the model's choice
+// and each mode's model/calibrated CPU ratio.
+// With --leaves every leaf size is timed for both modes (alternately) and the fastest of each
+// mode is reported.
 //   bench_periodic [--sizes 1e4,3e4,1e5] [--orders 4,5,6,7,8] [--leaves 64,128,256,512]
 //                  [--reps 3] [--phases]
 // --phases prints the engine's phase times (wall, single thread) of the best repetition.
+#include "cost_model.h"
 #include "fmm_core.h"
 #include "kifmm.h"
 
@@ -50,27 +56,28 @@ struct Timing {
   Stats stats;
 };
 
-// Free-space and periodic evaluators at one leaf size, timed alternately (free, periodic,
-// free, ...) so that both see the same machine load; minimum CPU time of each.
-void time_pair(const bench::Points &p, int order, int leaf, int reps, Timing out[2])
+// Evaluators (mode k: periodic[k], leaf[k]; 0 = engine default) timed alternately (0, 1, ...,
+// 0, 1, ...) so that all see the same machine load; minimum CPU time of each.
+void time_modes(const bench::Points &p, int order, int nm, const bool *periodic, const int *leaf, int reps,
+                Timing *out)
 {
-  std::unique_ptr<Evaluator> ev[2];
+  std::vector<std::unique_ptr<Evaluator>> ev(nm);
   const std::size_t n = p.size();
   std::vector<double> pot(n), g(3 * n);
-  for (int m = 0; m < 2; ++m) {
+  for (int m = 0; m < nm; ++m) {
     Options o;
     o.order = order;
-    o.leaf_size = leaf;
+    o.leaf_size = leaf[m];
     o.fixed_root = true;
     o.root_half_width = 1.0;
-    o.periodic = m == 1;
+    o.periodic = periodic[m];
     ev[m] = make_evaluator(KernelSpec{}, o);
     ev[m]->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());    // operators
     out[m] = Timing{};
     out[m].leaf = ev[m]->options().leaf_size;
   }
   for (int r = 0; r < reps; ++r)
-    for (int m = 0; m < 2; ++m) {
+    for (int m = 0; m < nm; ++m) {
       const double c0 = cpu_now();
       ev[m]->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());
       const double c = cpu_now() - c0;
@@ -106,8 +113,15 @@ int main(int argc, char **argv)
       return 1;
     }
   }
-  std::printf("| N | order | free leaf (depth) | free CPU s | periodic leaf (depth) | periodic CPU s | ratio |\n");
-  std::printf("|---|---|---|---|---|---|---|\n");
+  if (leaves.empty()) {
+    std::printf("| N | order | open leaf (depth) | open CPU s | periodic leaf (depth) | periodic CPU s | periodic/open |"
+                " calibrated leaf (depth open, periodic) | periodic/open calibrated | open model/calibrated |"
+                " periodic model/calibrated |\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
+  } else {
+    std::printf("| N | order | free leaf (depth) | free CPU s | periodic leaf (depth) | periodic CPU s | ratio |\n");
+    std::printf("|---|---|---|---|---|---|---|\n");
+  }
   for (double nd : sizes) {
     const std::size_t n = (std::size_t) nd;
     bench::Points p = bench::uniform(n, 2024);
@@ -116,13 +130,31 @@ int main(int argc, char **argv)
     for (double &q : p.q) q -= s / n;
     for (double od : orders) {
       const int order = (int) od;
+      if (leaves.empty()) {    // model choice (0: open, 1: periodic) and calibrated leaf (2, 3)
+        const bool per[4] = {false, true, false, true};
+        const int lf[4] = {choose_tree(order, n, false).leaf_size, choose_tree(order, n, true).leaf_size, 0, 0};
+        Timing t[4];
+        time_modes(p, order, 4, per, lf, reps, t);
+        if (phases)
+          for (int m = 0; m < 4; ++m) {
+            std::printf("    N=%zu p=%d leaf=%d depth=%d %s cpu %.4f\n", n, order, t[m].leaf, t[m].depth,
+                        per[m] ? "periodic" : "free", t[m].cpu);
+            print_phases(per[m] ? "periodic" : "free", t[m].stats);
+          }
+        std::printf("| %zu | %d | %d (%d) | %.4f | %d (%d) | %.4f | %.2f | %d (%d, %d) | %.2f | %.2f | %.2f |\n", n,
+                    order, t[0].leaf, t[0].depth, t[0].cpu, t[1].leaf, t[1].depth, t[1].cpu, t[1].cpu / t[0].cpu,
+                    t[2].leaf, t[2].depth, t[3].depth, t[3].cpu / t[2].cpu, t[0].cpu / t[2].cpu, t[1].cpu / t[3].cpu);
+        std::fflush(stdout);
+        continue;
+      }
       Timing best[2];
       std::vector<int> ls;
-      if (leaves.empty()) ls.push_back(0);
       for (double l : leaves) ls.push_back((int) l);
       for (int l : ls) {
         Timing t[2];
-        time_pair(p, order, l, reps, t);
+        const bool per[2] = {false, true};
+        const int lf[2] = {l, l};
+        time_modes(p, order, 2, per, lf, reps, t);
         for (int m = 0; m < 2; ++m) {
           if (phases) {
             std::printf("    N=%zu p=%d leaf=%d depth=%d %s cpu %.4f\n", n, order, t[m].leaf, t[m].depth,

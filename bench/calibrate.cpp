@@ -4,22 +4,229 @@
 // the gradient (force) on 2000 random targets against the direct sum. For each order the leaf
 // size with the smallest single-thread CPU time (robust to other load on the machine) is kept.
 // Usage (what produced the table):  OMP_NUM_THREADS=1 ./bench/calibrate > table.txt
+//
+// `calibrate --cost [--orders 3-14] [--reps 3]` regenerates the cost-model constants (kCost in
+// calibration.cpp, see cost_model.h): for each order, single-thread CPU time (minimum of
+// --reps) of evaluations of uniform points in the cube [-1,1]^3 (neutral charges, sources =
+// targets, fixed root) for both boundaries at N = 1e4, 3e4 (and 1e5 for orders <= 8) and the
+// depths with 8 to 600 points per leaf (leaf_size_for_depth), then the non-negative least-squares
+// fit (relative residuals) of
+// cost = point*N + pair*near + translation*trans + cell*cells to them (uniform_tree_counts).
+// Prints the table rows (ns) on stdout, the measured and fitted times on stderr.
+//
+// `calibrate --periodic-errors [--orders 3-13]` measures the periodic column of the choose_order
+// table: relative RMS force error over all points of periodic evaluations (tree of
+// choose_tree) of uniform points in the cell [-1,1]^3 (bench::uniform(n, seed), charges made
+// neutral) against order 14 (checked against the Ewald sum, periodic_direct_sum, on 200
+// targets), the largest of n = 2e4, 1e5 and seeds 1, 2. (The RMS force of random charges is
+// dominated by a few close pairs, so errors on a few hundred sampled targets scatter by 2-3x.)
+#include "cost_model.h"
 #include "direct_sum.h"
 #include "fmm_core.h"
 #include "kernels.h"
+#include "periodic.h"
 
 #include "bench_points.h"
 
+#include <time.h>
+
+#include <Eigen/Dense>
+
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <ctime>
 #include <random>
+#include <string>
 
 using namespace kifmm;
 
-int main()
+namespace {
+
+double cpu_now()
 {
+  timespec t;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return t.tv_sec + 1e-9 * t.tv_nsec;
+}
+
+int cost_fit(int order_lo, int order_hi, int reps)
+{
+  std::printf("    // order, point, pair, translation, cell (ns)   [rms relative residual of the fit]\n");
+  for (int order = order_lo; order <= order_hi; ++order) {
+    std::vector<std::array<double, 4>> rows;
+    std::vector<double> times;
+    std::vector<std::size_t> sizes{10000, 30000};
+    if (order <= 8) sizes.push_back(100000);
+    for (std::size_t n : sizes) {
+      bench::Points p = bench::uniform(n, 2024);
+      double s = 0;
+      for (double q : p.q) s += q;
+      for (double &q : p.q) q -= s / n;
+      std::vector<double> pot(n), g(3 * n);
+      for (int depth = 1; depth <= 8; ++depth) {
+        const double m = n / std::ldexp(1.0, 3 * depth);
+        if (m < 8 || m > 600) continue;
+        for (int periodic = 0; periodic < 2; ++periodic) {
+          Options o;
+          o.order = order;
+          o.leaf_size = leaf_size_for_depth(n, depth);
+          o.fixed_root = true;
+          o.root_half_width = 1.0;
+          o.periodic = periodic;
+          auto ev = make_evaluator(KernelSpec{}, o);
+          ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());    // operators
+          double t = 1e30;
+          for (int r = 0; r < reps; ++r) {
+            const double c0 = cpu_now();
+            ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());
+            t = std::min(t, cpu_now() - c0);
+          }
+          if (ev->stats().depth != depth)
+            std::fprintf(stderr, "warning: N %zu leaf %d gave depth %d, not %d\n", n, o.leaf_size,
+                         ev->stats().depth, depth);
+          const TreeCounts c = uniform_tree_counts(n, depth, periodic);
+          rows.push_back({(double) n, c.near_pairs, c.translations, c.cells});
+          times.push_back(t);
+        }
+      }
+    }
+    // least squares, relative (each equation divided by its time), columns scaled to O(1)
+    const int ne = (int) rows.size();
+    Eigen::MatrixXd A(ne, 4);
+    Eigen::VectorXd b(ne);
+    double colscale[4] = {0, 0, 0, 0};
+    for (int i = 0; i < ne; ++i)
+      for (int k = 0; k < 4; ++k) colscale[k] = std::max(colscale[k], rows[i][k] / times[i]);
+    for (int i = 0; i < ne; ++i) {
+      for (int k = 0; k < 4; ++k) A(i, k) = rows[i][k] / times[i] / colscale[k];
+      b(i) = 1.0;
+    }
+    // non-negative least squares by enumeration: the best fit over the subsets of the columns
+    // whose solution has no negative constant (translation and cell terms are nearly collinear)
+    double c[4] = {0, 0, 0, 0}, best = 1e300, rms = 0;
+    for (int mask = 1; mask < 16; ++mask) {
+      std::vector<int> cols;
+      for (int k = 0; k < 4; ++k)
+        if (mask >> k & 1) cols.push_back(k);
+      Eigen::MatrixXd As(ne, (int) cols.size());
+      for (std::size_t j = 0; j < cols.size(); ++j) As.col((int) j) = A.col(cols[j]);
+      const Eigen::VectorXd x = As.colPivHouseholderQr().solve(b);
+      if ((x.array() < 0).any()) continue;
+      const double r = (As * x - b).squaredNorm();
+      if (r < best) {
+        best = r;
+        for (int k = 0; k < 4; ++k) c[k] = 0;
+        for (std::size_t j = 0; j < cols.size(); ++j) c[cols[j]] = x((int) j) / colscale[cols[j]];
+      }
+    }
+    for (int i = 0; i < ne; ++i) {
+      double f = 0;
+      for (int k = 0; k < 4; ++k) f += c[k] * rows[i][k];
+      rms += (f / times[i] - 1) * (f / times[i] - 1);
+      std::fprintf(stderr, "order %d N %.0f %s near %.3g trans %.3g cells %.0f: measured %.4f s, model %.4f s\n",
+                   order, rows[i][0], i % 2 ? "periodic" : "open    ", rows[i][1], rows[i][2], rows[i][3], times[i], f);
+    }
+    std::printf("    {%d, %.4g, %.4g, %.4g, %.4g},    // [%.3f]\n", order, 1e9 * c[0], 1e9 * c[1], 1e9 * c[2],
+                1e9 * c[3], std::sqrt(rms / ne));
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
+// all-target gradient of a periodic evaluation of p at this order (tree of choose_tree)
+std::vector<double> periodic_grad(const bench::Points &p, int order)
+{
+  const std::size_t n = p.size();
+  Options o;
+  o.order = order;
+  o.leaf_size = choose_tree(order, n, true).leaf_size;
+  o.fixed_root = true;
+  o.root_half_width = 1.0;
+  o.periodic = true;
+  std::vector<double> pot(n), gr(3 * n);
+  make_evaluator(KernelSpec{}, o)->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), gr.data());
+  return gr;
+}
+
+double rel_rms(const std::vector<double> &a, const std::vector<double> &b)
+{
+  double num = 0, den = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    num += (a[i] - b[i]) * (a[i] - b[i]);
+    den += b[i] * b[i];
+  }
+  return std::sqrt(num / den);
+}
+
+int periodic_errors(int order_lo, int order_hi)
+{
+  // configurations: n = 2e4, 1e5, seeds 1, 2; reference: order 14 over all targets, itself
+  // checked against the Ewald sum on 200 sampled targets
+  struct Config {
+    std::size_t n;
+    unsigned seed;
+    bench::Points p;
+    std::vector<double> ref;
+  };
+  std::vector<Config> cfg;
+  for (std::size_t n : {20000, 100000})
+    for (unsigned seed : {1u, 2u}) {
+      Config c{n, seed, bench::uniform(n, seed), {}};
+      double s = 0;
+      for (double q : c.p.q) s += q;
+      for (double &q : c.p.q) q -= s / n;
+      c.ref = periodic_grad(c.p, 14);
+      const std::size_t ns = 200;
+      std::vector<double> tx(3 * ns), rp(ns), rg(3 * ns), sg(3 * ns);
+      for (std::size_t i = 0; i < ns; ++i)
+        for (int d = 0; d < 3; ++d) {
+          tx[3 * i + d] = c.p.xyz[3 * (i * (n / ns)) + d];
+          sg[3 * i + d] = c.ref[3 * (i * (n / ns)) + d];
+        }
+      const double c0[3] = {0, 0, 0};
+      periodic_direct_sum(KernelSpec{}, c0, 1.0, n, c.p.xyz.data(), c.p.q.data(), ns, tx.data(), rp.data(), rg.data());
+      std::fprintf(stderr, "n %zu seed %u: order-14 reference vs Ewald on %zu targets: %.2e\n", n, seed, ns,
+                   rel_rms(sg, rg));
+      cfg.push_back(std::move(c));
+    }
+  std::printf("    // order, periodic relative RMS force error over all points (max of n = 2e4, 1e5, seeds 1, 2)\n");
+  for (int order = order_lo; order <= order_hi; ++order) {
+    double worst = 0;
+    std::string each;
+    for (const Config &c : cfg) {
+      const double e = rel_rms(periodic_grad(c.p, order), c.ref);
+      worst = std::max(worst, e);
+      char b[32];
+      std::snprintf(b, sizeof b, " %.2e", e);
+      each += b;
+    }
+    std::printf("    {%d, %.2e},    //%s\n", order, worst, each.c_str());
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
+}    // namespace
+
+int main(int argc, char **argv)
+{
+  if (argc > 1 && !std::strcmp(argv[1], "--periodic-errors")) {
+    int lo = 3, hi = 14;
+    if (argc > 3 && !std::strcmp(argv[2], "--orders")) std::sscanf(argv[3], "%d-%d", &lo, &hi);
+    return periodic_errors(lo, hi);
+  }
+  if (argc > 1 && !std::strcmp(argv[1], "--cost")) {
+    int lo = 3, hi = 14, reps = 3;
+    for (int i = 2; i + 1 < argc; i += 2) {
+      if (!std::strcmp(argv[i], "--orders")) std::sscanf(argv[i + 1], "%d-%d", &lo, &hi);
+      else if (!std::strcmp(argv[i], "--reps")) reps = std::atoi(argv[i + 1]);
+    }
+    return cost_fit(lo, hi, reps);
+  }
   const std::size_t n = 100000, ns = 2000;
   bench::Points p = bench::uniform(n, 1);
   std::vector<std::size_t> sample(n);

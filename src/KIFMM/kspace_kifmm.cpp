@@ -140,7 +140,7 @@ void KSpaceKIFMM::init()
     opt.order = kset.order;
     est = -1.0;
   } else {
-    kifmm::Choice c = kifmm::choose_order(kernel, kset.accuracy);
+    kifmm::Choice c = kifmm::choose_order(kernel, kset.accuracy, periodic);
     opt.order = c.order;
     est = c.measured_error;
   }

@@ -98,11 +98,25 @@ void direct_sum(const KernelSpec &kernel, std::size_t n_src, const double *src_x
 
 // Calibration: smallest-cost (order, leaf size) whose measured relative RMS force error
 // is below rel_force_error; also returns the error that was measured for that choice.
+// periodic: errors measured with periodic boundaries (larger at the same order). The leaf
+// size is the engine default for the order (per order, not per N: see choose_tree).
 struct Choice {
   int order;
   int leaf_size;
   double measured_error;
 };
-Choice choose_order(const KernelSpec &kernel, double rel_force_error);
+Choice choose_order(const KernelSpec &kernel, double rel_force_error, bool periodic = false);
+
+// Tree for n points at this order and boundary: the depth of least modelled CPU time for n
+// points spread uniformly over the root cube (cost_model.h: near-field pairs, M2L translations
+// and cells per depth, constants fitted to measured evaluations), and the leaf size that gives
+// that depth (about 2.8 n / 8^depth). Deterministic: the same n gives the same tree on every
+// rank. Used by kspace_style kifmm when no leaf size is given.
+struct TreeChoice {
+  int leaf_size;
+  int depth;          // depth of the tree over uniform points (clustered points go deeper)
+  double cost;        // modelled CPU seconds of one evaluation (one thread)
+};
+TreeChoice choose_tree(int order, std::size_t n, bool periodic);
 
 }    // namespace kifmm

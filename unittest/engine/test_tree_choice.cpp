@@ -1,0 +1,159 @@
+// Tree choice per N and boundary (cost_model.h, choose_tree in kifmm.h): the counts of the cost
+// model against the interaction lists of real trees, the depth the chosen leaf size gives on
+// uniform points, and the accuracy of evaluations with the chosen trees (open: direct sum;
+// periodic: the Ewald reference sum) at the orders the accuracies 1e-3 .. 1e-7 select.
+#include "cost_model.h"
+#include "fmm_core.h"
+#include "periodic.h"
+#include "test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <set>
+#include <utility>
+
+using kifmm::KernelSpec;
+using namespace kifmm_test;
+
+namespace {
+
+Points neutral_uniform(std::size_t n, unsigned seed)
+{
+  Points p = uniform_cube(n, seed);
+  double s = 0;
+  for (double q : p.q) s += q;
+  for (double &q : p.q) q -= s / n;
+  return p;
+}
+
+kifmm::Options cube_opts(int order, int leaf, bool periodic)
+{
+  kifmm::Options o;
+  o.order = order;
+  o.leaf_size = leaf;
+  o.fixed_root = true;
+  o.root_half_width = 1.0;
+  o.periodic = periodic;
+  return o;
+}
+
+}    // namespace
+
+// The model's near pairs, M2L translations and cells are those of the lists of a real tree
+// built with leaf_size_for_depth over uniform points (translations and cells exactly; point
+// pairs up to the random leaf occupancies).
+TEST(TreeChoice, ModelCountsMatchTheListsOfRealTrees)
+{
+  for (bool periodic : {false, true})
+    for (auto [n, depth] : {std::pair<std::size_t, int>{3000, 1}, {10000, 2}, {30000, 2}, {30000, 3}}) {
+      const Points p = neutral_uniform(n, 7);
+      kifmm::Octree tree;
+      kifmm::RootBox root;
+      build_octree(tree, root, n, p.xyz.data(), n, p.xyz.data(), kifmm::leaf_size_for_depth(n, depth), 20);
+      ASSERT_EQ(tree.depth, depth) << n;
+      ASSERT_EQ(tree.leaves.size(), std::size_t(1) << (3 * depth));
+      kifmm::InteractionLists lists;
+      kifmm::PeriodicImageLists images;
+      if (periodic)
+        build_periodic_interaction_lists(tree, lists, images);
+      else
+        build_interaction_lists(tree, lists);
+      double pairs = 0, trans = 0, cells = 0;
+      for (int b : tree.leaves) {
+        const double nb = tree.cells[b].n_trg();
+        for (const int *a = lists.U.begin(b); a != lists.U.end(b); ++a) pairs += nb * tree.cells[*a].n_src();
+        if (periodic)
+          for (int e = images.U.begin(b); e < images.U.end(b); ++e) pairs += nb * tree.cells[images.U.idx[e]].n_src();
+      }
+      pairs /= 2;
+      for (int l = periodic ? 0 : 2; l <= tree.depth; ++l)
+        for (int c = tree.level_begin[l]; c < tree.level_begin[l + 1]; ++c) {
+          cells += 1;
+          if (periodic && l <= 2) {    // distinct source cells (kernels summed over the slots)
+            std::set<int> distinct(lists.V.begin(c), lists.V.end(c));
+            trans += distinct.size();
+          } else {
+            trans += lists.V.size(c);
+          }
+        }
+      const kifmm::TreeCounts m = kifmm::uniform_tree_counts(n, depth, periodic);
+      EXPECT_EQ(trans, m.translations) << "periodic " << periodic << " n " << n << " depth " << depth;
+      EXPECT_EQ(cells, m.cells);
+      EXPECT_NEAR(pairs / m.near_pairs, 1.0, 0.03) << "periodic " << periodic << " n " << n << " depth " << depth;
+    }
+}
+
+// choose_tree returns the depth of least modelled cost and the leaf size of that depth; the
+// chosen leaf size gives that depth (a full tree) on uniform points through the evaluator.
+TEST(TreeChoice, ChosenLeafGivesTheModelsDepth)
+{
+  for (int order = 3; order <= 14; ++order)
+    for (bool periodic : {false, true})
+      for (std::size_t n : {1000, 10000, 30000, 100000, 1000000, 10000000}) {
+        const kifmm::TreeChoice c = kifmm::choose_tree(order, n, periodic);
+        EXPECT_EQ(c.leaf_size, kifmm::leaf_size_for_depth(n, c.depth));
+        EXPECT_DOUBLE_EQ(c.cost, kifmm::modelled_cost(order, n, periodic, c.depth));
+        for (int d = 0; std::ldexp(1.0, 3 * d) <= (double) n; ++d)
+          EXPECT_LE(c.cost, kifmm::modelled_cost(order, n, periodic, d)) << order << " " << n << " " << d;
+        EXPECT_GT(c.cost, 0.0);
+        // the periodic cell has more neighbors and translations than the open cube
+        EXPECT_GT(kifmm::modelled_cost(order, n, true, c.depth), kifmm::modelled_cost(order, n, false, c.depth));
+      }
+  for (bool periodic : {false, true})
+    for (int order : {4, 6, 8})
+      for (std::size_t n : {10000, 30000, 100000}) {
+        const kifmm::TreeChoice c = kifmm::choose_tree(order, n, periodic);
+        const Points p = neutral_uniform(n, 11);
+        auto ev = kifmm::make_evaluator(KernelSpec{}, cube_opts(order, c.leaf_size, periodic));
+        std::vector<double> pot(n), g(3 * n);
+        ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());
+        EXPECT_EQ(ev->stats().depth, c.depth) << "order " << order << " n " << n << " periodic " << periodic;
+        EXPECT_EQ(ev->stats().n_leaves, std::size_t(1) << (3 * c.depth));
+      }
+}
+
+// Errors of evaluations with the chosen tree stay within the requested accuracy (the order
+// from choose_order for the boundary), for both boundaries, over all 20000 uniform points:
+// open against the direct sum, periodic against order 14 (itself checked against the Ewald sum
+// on 200 targets). All targets: the RMS force of random charges is dominated by a few close
+// pairs, so errors on a few hundred sampled targets scatter by 2-3x.
+TEST(TreeChoice, ChosenTreesMeetTheRequestedAccuracy)
+{
+  const std::size_t n = 20000, ns = 200;
+  const Points p = neutral_uniform(n, 5);
+  auto grad_of = [&](int order, int leaf, bool periodic) {
+    std::vector<double> pot(n), g(3 * n);
+    auto ev = kifmm::make_evaluator(KernelSpec{}, cube_opts(order, leaf, periodic));
+    ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());
+    return std::make_pair(g, ev->stats().depth);
+  };
+  for (bool periodic : {false, true}) {
+    std::vector<double> rp(n), rg(3 * n);
+    if (periodic) {
+      rg = grad_of(14, kifmm::choose_tree(14, n, true).leaf_size, true).first;
+      std::vector<double> sx(3 * ns), sp(ns), sg(3 * ns), eg(3 * ns);
+      for (std::size_t i = 0; i < ns; ++i)
+        for (int d = 0; d < 3; ++d) {
+          sx[3 * i + d] = p.xyz[3 * (i * (n / ns)) + d];
+          sg[3 * i + d] = rg[3 * (i * (n / ns)) + d];
+        }
+      const double c0[3] = {0, 0, 0};
+      kifmm::periodic_direct_sum(KernelSpec{}, c0, 1.0, n, p.xyz.data(), p.q.data(), ns, sx.data(), sp.data(), eg.data());
+      ASSERT_LE(rel_l2(sg, eg), 1e-9) << "order-14 reference vs Ewald";
+    } else {
+      kifmm::direct_sum(KernelSpec{}, n, p.xyz.data(), p.q.data(), n, p.xyz.data(), rp.data(), rg.data());
+    }
+    for (double acc : {1e-3, 1e-4, 1e-5, 1e-6, 1e-7}) {
+      const int order = kifmm::choose_order(KernelSpec{}, acc, periodic).order;
+      const kifmm::TreeChoice c = kifmm::choose_tree(order, n, periodic);
+      const auto [g, depth] = grad_of(order, c.leaf_size, periodic);
+      const double err = rel_l2(g, rg);
+      std::printf("  %s accuracy %.0e: order %d leaf %d depth %d, force error %.2e\n", periodic ? "periodic" : "open",
+                  acc, order, c.leaf_size, depth, err);
+      EXPECT_EQ(depth, c.depth);
+      EXPECT_LE(err, acc) << (periodic ? "periodic" : "open") << " order " << order;
+    }
+  }
+}

@@ -20,23 +20,24 @@ struct Row {
 // points in a cube, charges in [-1,1], Laplace, error of the gradient on 2000 random targets vs
 // the direct sum; per order the leaf size (from 64, 128, 256, 512) with the least CPU time.
 // For 1e5 uniform points 256 and 512 give the same tree (depth 3), 64 and 128 depth 4.
-// periodic_error: `./bench/calibrate --periodic-errors` (2026-11-23): the same points (made
-// neutral) as a periodic cell, tree of choose_tree, error on 1000 targets vs the Ewald sum,
-// the larger of 2e4 and 1e5 points. Every target has full M2L lists at every level (no
-// boundary), so the error at an order is 1.3-2.5 times the open one.
+// periodic_error: `OMP_NUM_THREADS=2 ./bench/calibrate --periodic-errors --orders 3-13`
+// (2026-11-23): uniform points (made neutral) in the periodic cell, tree of choose_tree, error
+// over all points against order 14 (which agrees with the Ewald sum to 1e-11 .. 4e-11, the
+// value given for order 14), the largest of 2e4 and 1e5 points, seeds 1 and 2 (2e4 points
+// give 2-3 times the errors of 1e5).
 const Row kTable[] = {
-    {3, 128, 2.36e-03, 2.59e-03},    // 0.109 s
-    {4, 128, 4.17e-04, 4.43e-04},    // 0.159 s
-    {5, 128, 4.95e-05, 3.53e-05},    // 0.252 s
-    {6, 512, 4.49e-06, 6.03e-06},    // 0.288 s
-    {7, 512, 5.95e-07, 8.32e-07},    // 0.339 s
-    {8, 512, 1.23e-07, 1.56e-07},    // 0.375 s
-    {9, 512, 1.78e-08, 2.43e-08},    // 0.470 s
-    {10, 512, 7.40e-09, 9.64e-09},   // 0.524 s
-    {11, 256, 4.77e-10, 6.83e-10},   // 0.655 s
-    {12, 512, 9.63e-11, 1.72e-10},   // 0.730 s
-    {13, 256, 1.77e-11, 2.55e-11},   // 0.901 s
-    {14, 256, 6.56e-12, 6.56e-12},   // 1.093 s
+    {3, 128, 2.36e-03, 2.04e-03},    // 0.109 s
+    {4, 128, 4.17e-04, 3.66e-04},    // 0.159 s
+    {5, 128, 4.95e-05, 4.43e-05},    // 0.252 s
+    {6, 512, 4.49e-06, 7.10e-06},    // 0.288 s
+    {7, 512, 5.95e-07, 7.17e-07},    // 0.339 s
+    {8, 512, 1.23e-07, 1.34e-07},    // 0.375 s
+    {9, 512, 1.78e-08, 2.28e-08},    // 0.470 s
+    {10, 512, 7.40e-09, 8.31e-09},   // 0.524 s
+    {11, 256, 4.77e-10, 6.75e-10},   // 0.655 s
+    {12, 512, 9.63e-11, 1.46e-10},   // 0.730 s
+    {13, 256, 1.77e-11, 2.89e-11},   // 0.901 s
+    {14, 256, 6.56e-12, 3.84e-11},   // 1.093 s
 };
 constexpr int kRows = sizeof kTable / sizeof kTable[0];
 }    // namespace
@@ -66,24 +67,24 @@ namespace {
 // cell. Produced by `OMP_NUM_THREADS=1 ./bench/calibrate --cost` (bench/calibrate.cpp): least
 // squares over measured single-thread CPU times of evaluations of uniform points (both
 // boundaries, several N and depths), with the counts of uniform_tree_counts; in brackets the
-// RMS relative residual of the fit. Measured 2026-11-23 (load ~8 on 2 cores).
+// RMS relative residual of the fit. Measured 2026-11-23 (load 4-6 on 2 cores).
 struct CostRow {
   int order;
   double point, pair, translation, cell;
 };
 const CostRow kCost[] = {
-    {3, 228.9, 0.7089, 96.17, 0},    // [0.027]
-    {4, 290.3, 0.6845, 134.9, 1676},    // [0.020]
-    {5, 356, 0.6743, 230.8, 8301},    // [0.027]
-    {6, 359, 0.697, 294.3, 2.838e+04},    // [0.038]
-    {7, 561.1, 0.6743, 426.1, 5.349e+04},    // [0.040]
-    {8, 760, 0.6225, 604.8, 7.205e+04},    // [0.049]
-    {9, 652.7, 0.7099, 580.9, 2.001e+05},    // [0.041]
-    {10, 882.1, 0.6757, 1120, 1.777e+05},    // [0.045]
-    {11, 379.4, 0.783, 1280, 3.71e+05},    // [0.092]
-    {12, 443.2, 0.7801, 1646, 4.232e+05},    // [0.090]
-    {13, 657.8, 0.7871, 2866, 4.803e+05},    // [0.102]
-    {14, 0, 0.9613, 3564, 7.67e+05},    // [0.110]
+    {3, 224, 0.7052, 92.17, 0},    // [0.032]
+    {4, 286.4, 0.6828, 149.9, 232.8},    // [0.025]
+    {5, 380, 0.6811, 211.4, 7037},    // [0.022]
+    {6, 309.7, 0.7213, 303.1, 2.789e+04},    // [0.037]
+    {7, 584.6, 0.6548, 455.9, 4.707e+04},    // [0.037]
+    {8, 626, 0.6704, 635.1, 7.565e+04},    // [0.038]
+    {9, 600.8, 0.7151, 770.9, 1.84e+05},    // [0.044]
+    {10, 746, 0.6944, 993, 1.94e+05},    // [0.063]
+    {11, 659.5, 0.7511, 1459, 3.585e+05},    // [0.087]
+    {12, 345, 0.8486, 1752, 4.624e+05},    // [0.094]
+    {13, 0, 0.9459, 2013, 6.522e+05},    // [0.108]
+    {14, 0, 0.9564, 2880, 8.386e+05},    // [0.126]
 };
 
 // ordered pairs (i, j) of [0, n) with |i - j| <= 1 (adjacent or equal cells along one axis)

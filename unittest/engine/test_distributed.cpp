@@ -150,14 +150,6 @@ Points joined(Points a, const Points &b)
   return a;
 }
 
-Points neutral(Points p)
-{
-  double s = 0;
-  for (double q : p.q) s += q;
-  for (double &q : p.q) q -= s / p.q.size();
-  return p;
-}
-
 // Periodic cell [-1, 1]^3: two dense clusters (sigma 2e-4) centred on the faces x = -1 and
 // x = +1 (each straddles the boundary: its halves are neighbours only through the face), a
 // sparse uniform halo, and some points given outside the cell (wrapped by the engine).
@@ -219,40 +211,51 @@ TEST(Distributed, AdaptiveTopTreeEqualsSerial)
   check_all_partitions(c, 0, 16);
 }
 
-TEST(Distributed, YukawaEqualsSerial)
+// Yukawa (kappa 2): every partition, top level 0 or 3
+void check_yukawa(const Points &p, double periodic_half)
 {
   kifmm::KernelSpec spec;
   spec.type = kifmm::KernelType::Yukawa;
   spec.kappa = 2.0;
   kifmm::YukawaKernel k{2.0};
-  Points p = two_clusters(1500, 17);
-  Points u = uniform_cube(1500, 18, 5.0);
-  p.xyz.insert(p.xyz.end(), u.xyz.begin(), u.xyz.end());
-  p.q.insert(p.q.end(), u.q.begin(), u.q.end());
   for (int j = 0; j < 4; ++j) {
-    Result r = compare(k, spec, p, kPartitions[j], j % 2 ? 3 : 0);
+    Result r = compare(k, spec, p, kPartitions[j], j % 2 ? 3 : 0, 24, 6, periodic_half);
     EXPECT_LE(r.grad, 1e-10) << kPartitionNames[j];
     EXPECT_LE(r.pot, 1e-10) << kPartitionNames[j];
   }
 }
 
+TEST(Distributed, YukawaEqualsSerial)
+{
+  Points p = two_clusters(1500, 17);
+  Points u = uniform_cube(1500, 18, 5.0);
+  p.xyz.insert(p.xyz.end(), u.xyz.begin(), u.xyz.end());
+  p.q.insert(p.q.end(), u.q.begin(), u.q.end());
+  check_yukawa(p, 0.0);
+}
+
 // No all-gather: with spatial slabs, a rank receives only the points of the frontier cells near
-// its slab, not the other ranks' points.
-TEST(Distributed, GhostsAreLocal)
+// its slab, not the other ranks' points (periodic: through the cell's faces too).
+void check_ghosts_are_local(const Points &p, double periodic_half)
 {
   const int np = size_of_world();
-  if (np < 3) GTEST_SKIP() << "needs 3 or more ranks";
   kifmm::LaplaceKernel k;
   kifmm::KernelSpec spec;
-  Points p = uniform_cube(8000, 19);
-  Result r = compare(k, spec, p, slabs_last_empty, 4, 32);
+  Result r = compare(k, spec, p, slabs_last_empty, 4, 32, 6, periodic_half);
   EXPECT_LE(r.grad, 1e-10);
-  const double others = 8000.0 - 8000.0 / (np - 1);
+  EXPECT_LE(r.pot, 1e-10);
+  const double n = (double) p.size(), others = n - n / (np - 1);
   EXPECT_LT((double) r.ghosts, 0.75 * others) << "ghosts " << r.ghosts << " of " << others;
   if (rank_of_world() == 0)
-    printf("  max over ranks: own points %zu, ghost points %zu (others' points %.0f), bytes sent %zu\n", r.own,
-           r.ghosts, others, r.comm_bytes);
+    printf("  %s, max over ranks: own points %zu, ghost points %zu (others' points %.0f), bytes sent %zu\n",
+           periodic_half > 0 ? "periodic" : "open", r.own, r.ghosts, others, r.comm_bytes);
   EXPECT_GT(r.comm_bytes, 0u);
+}
+
+TEST(Distributed, GhostsAreLocal)
+{
+  if (size_of_world() < 3) GTEST_SKIP() << "needs 3 or more ranks";
+  check_ghosts_are_local(uniform_cube(8000, 19), 0.0);
 }
 
 // ---------------------------------------------------------------- periodic boundaries
@@ -286,36 +289,13 @@ TEST(Distributed, PeriodicFewPointsEqualSerial)
 
 TEST(Distributed, PeriodicYukawaEqualsSerial)
 {
-  kifmm::KernelSpec spec;
-  spec.type = kifmm::KernelType::Yukawa;
-  spec.kappa = 2.0;
-  kifmm::YukawaKernel k{2.0};
-  Points p = periodic_clusters(2400, 36);
-  for (int j = 0; j < 4; ++j) {
-    Result r = compare(k, spec, p, kPartitions[j], j % 2 ? 3 : 0, 24, 6, 1.0);
-    EXPECT_LE(r.grad, 1e-10) << kPartitionNames[j];
-    EXPECT_LE(r.pot, 1e-10) << kPartitionNames[j];
-  }
+  check_yukawa(periodic_clusters(2400, 36), 1.0);
 }
 
-// No all-gather with periodic boundaries either: slabs get the frontier cells next to them,
-// through the periodic faces too, not every other rank's points.
 TEST(Distributed, PeriodicGhostsAreLocal)
 {
-  const int np = size_of_world();
-  if (np < 3) GTEST_SKIP() << "needs 3 or more ranks";
-  kifmm::LaplaceKernel k;
-  kifmm::KernelSpec spec;
-  Points p = neutral(uniform_cube(8000, 37));
-  Result r = compare(k, spec, p, slabs_last_empty, 4, 32, 6, 1.0);
-  EXPECT_LE(r.grad, 1e-10);
-  EXPECT_LE(r.pot, 1e-10);
-  const double others = 8000.0 - 8000.0 / (np - 1);
-  EXPECT_LT((double) r.ghosts, 0.75 * others) << "ghosts " << r.ghosts << " of " << others;
-  if (rank_of_world() == 0)
-    printf("  periodic, max over ranks: own points %zu, ghost points %zu (others' points %.0f), bytes sent %zu\n",
-           r.own, r.ghosts, others, r.comm_bytes);
-  EXPECT_GT(r.comm_bytes, 0u);
+  if (size_of_world() < 3) GTEST_SKIP() << "needs 3 or more ranks";
+  check_ghosts_are_local(neutral(uniform_cube(8000, 37)), 1.0);
 }
 
 int main(int argc, char **argv)

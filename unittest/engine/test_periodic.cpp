@@ -33,14 +33,6 @@ kifmm::Options periodic_opts(int order, int leaf, double h = 1.0, const double c
   return o;
 }
 
-Points neutral(Points p)
-{
-  double s = 0;
-  for (double q : p.q) s += q;
-  for (double &q : p.q) q -= s / p.q.size();
-  return p;
-}
-
 struct PerErrors {
   double pot, grad;
 };

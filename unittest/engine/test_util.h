@@ -93,6 +93,15 @@ inline Points dipoles(std::size_t npairs, unsigned seed)
   return p;
 }
 
+// The same points with the mean charge subtracted (net charge zero).
+inline Points neutral(Points p)
+{
+  double s = 0;
+  for (double q : p.q) s += q;
+  for (double &q : p.q) q -= s / p.q.size();
+  return p;
+}
+
 inline double rel_l2(const std::vector<double> &a, const std::vector<double> &ref)
 {
   double num = 0, den = 0;

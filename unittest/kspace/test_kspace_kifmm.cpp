@@ -584,7 +584,9 @@ class MpiEqualsSerial : public KSpaceKifmm {
     for (double &q : c.q) q *= 0.001;    // gentle dynamics: atoms migrate, no chaos
     int me = 0;
     MPI_Comm_rank(MPI_COMM_WORLD, &me);
-    data_path = "kifmm_mpi_equals_serial.data";
+    // one file per test: ctest -j runs the tests of this binary at the same time in one folder
+    data_path = std::string("kifmm_mpi_equals_serial_") +
+        testing::UnitTest::GetInstance()->current_test_info()->name() + ".data";
     if (me == 0) write_charge_data(data_path, c);
     MPI_Barrier(MPI_COMM_WORLD);
     command("variable datafile string " + data_path);
@@ -597,6 +599,19 @@ class MpiEqualsSerial : public KSpaceKifmm {
     if (me != 0) data_path = "/nonexistent";    // only rank 0 removes the file
     KSpaceKifmm::TearDown();
   }
+  // the data file replaced by a small Plummer ball (2000 atoms) around (0.1, 0.1, 0.1) of the
+  // unit box: inside one rank's domain on up to 8 ranks
+  void write_ball_in_one_domain()
+  {
+    Configuration c = plummer(2000, 41, 0.02);
+    for (auto &x : c.x)
+      for (double &v : x) v = 0.1 + 0.2 * (v - 0.5);
+    for (double &q : c.q) q *= 1e-4;
+    int me = 0;
+    MPI_Comm_rank(MPI_COMM_WORLD, &me);
+    if (me == 0) write_charge_data(data_path, c);
+    MPI_Barrier(MPI_COMM_WORLD);
+  }
 };
 
 TEST_F(MpiEqualsSerial, Brick)
@@ -607,14 +622,7 @@ TEST_F(MpiEqualsSerial, Brick)
 // all atoms inside one rank's domain (a collapsed planetoid in a corner): other ranks are empty
 TEST_F(MpiEqualsSerial, AllAtomsOnOneRank)
 {
-  Configuration c = plummer(2000, 41, 0.02);
-  for (auto &x : c.x)
-    for (double &v : x) v = 0.1 + 0.2 * (v - 0.5);
-  for (double &q : c.q) q *= 1e-4;
-  int me = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &me);
-  if (me == 0) write_charge_data(data_path, c);
-  MPI_Barrier(MPI_COMM_WORLD);
+  write_ball_in_one_domain();
   check_force_reference(REFERENCE_DIR "/kifmm_mpi_one_rank.yaml");
 }
 
@@ -627,5 +635,35 @@ TEST_F(MpiEqualsSerial, Rcb)
 TEST_F(MpiEqualsSerial, VirialRcb)
 {
   check_force_reference(REFERENCE_DIR "/kifmm_mpi_virial_rcb.yaml");
+}
+
+// Periodic boundaries (p p p, the unit cube): the two clusters at 0.05 and 0.95 are one cluster
+// around the cell's corner (neighbours only through the faces), atoms cross the faces and
+// migrate; energy, forces and the scalar pressure equal the 1-rank run without an all-gather
+TEST_F(MpiEqualsSerial, PeriodicBrick)
+{
+  check_force_reference(REFERENCE_DIR "/kifmm_mpi_periodic.yaml");
+}
+
+TEST_F(MpiEqualsSerial, PeriodicRcb)
+{
+  check_force_reference(REFERENCE_DIR "/kifmm_mpi_periodic_rcb.yaml");
+}
+
+TEST_F(MpiEqualsSerial, PeriodicPressureRcb)
+{
+  check_force_reference(REFERENCE_DIR "/kifmm_mpi_periodic_press_rcb.yaml");
+}
+
+TEST_F(MpiEqualsSerial, PeriodicYukawaBrick)
+{
+  check_force_reference(REFERENCE_DIR "/kifmm_mpi_periodic_yukawa.yaml");
+}
+
+// all atoms in a small ball inside one rank's domain (the other ranks are empty), p p p
+TEST_F(MpiEqualsSerial, PeriodicAllAtomsOnOneRank)
+{
+  write_ball_in_one_domain();
+  check_force_reference(REFERENCE_DIR "/kifmm_mpi_periodic_one_rank.yaml");
 }
 }    // namespace

@@ -271,6 +271,42 @@ TEST_F(Periodic, MeasuredErrorWithinRequestedAccuracy)
   }
 }
 
+// Without a leaf keyword the leaf size is the engine's cost-model choice for the atom count
+// and the boundary (kifmm::choose_tree), printed with its depth at setup; uniform atoms get
+// that depth. Open boundaries (f f f) get their own choice.
+class PeriodicTreeChoice : public Periodic {
+ protected:
+  void expect_cost_model_choice(const char *boundary)
+  {
+    const bool periodic = boundary[0] == 'p';
+    load(uniform_cube(3000, 48), boundary);
+    commands("pair_style zero 0.01\npair_coeff * *\nkspace_style kifmm 1e-5");
+    const std::string out = output_of("run 0 post no");
+    const int order = kifmm::choose_order(kifmm::KernelSpec{}, 1e-5, periodic).order;
+    const kifmm::TreeChoice c = kifmm::choose_tree(order, 3000, periodic);
+    auto *ks = dynamic_cast<LAMMPS_NS::KSpaceKIFMM *>(lmp->force->kspace);
+    ASSERT_NE(ks, nullptr);
+    EXPECT_EQ(ks->engine_stats().depth, c.depth) << boundary;
+    const std::string line = "order = " + std::to_string(order) + ", leaf size = " + std::to_string(c.leaf_size) +
+        " (tree depth " + std::to_string(c.depth) + " for 3000 uniformly spread atoms, " +
+        (periodic ? "periodic" : "open") + " boundaries";
+    if (rank() == 0) {
+      EXPECT_NE(out.find(line), std::string::npos) << line << "\n" << out;
+      EXPECT_NE(out.find("tree depth " + std::to_string(c.depth) + ","), std::string::npos) << out;
+    }
+  }
+};
+
+TEST_F(PeriodicTreeChoice, PeriodicBoundaries)
+{
+  expect_cost_model_choice("p p p");
+}
+
+TEST_F(PeriodicTreeChoice, OpenBoundaries)
+{
+  expect_cost_model_choice("f f f");
+}
+
 TEST_F(Periodic, CheckUsesThePeriodicReference)
 {
   load(uniform_cube(1000, 47));

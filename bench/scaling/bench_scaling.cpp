@@ -1,7 +1,8 @@
 // Strong-scaling benchmark of the distributed evaluation (engine level, no LAMMPS):
-//   mpirun -np P bench_scaling N [uniform|plummer] [order] [reps] [top_level]
+//   mpirun -np P bench_scaling N [uniform|periodic|plummer] [order] [reps] [top_level]
 // Each rank makes only its own points: uniform in its brick of a P-brick decomposition of
-// [-1,1]^3 (as LAMMPS's processor grid), or, for plummer, the points of a Plummer sphere in its
+// [-1,1]^3 (as LAMMPS's processor grid; periodic: the same points, [-1,1]^3 is the periodic
+// cell, Laplace with its background term), or, for plummer, the points of a Plummer sphere in its
 // brick (every rank draws the same sequence and keeps its own; N <= 1e6). Prints one JSON line
 // (rank 0): wall time per evaluation (max over ranks), CPU seconds per evaluation (sum over
 // ranks), phases (max over ranks), bytes sent per rank and ghost points per rank (min/avg/max).
@@ -94,6 +95,11 @@ int main(int argc, char **argv)
   kifmm::Options o;
   o.order = order;
   o.top_level = top;
+  if (dist == "periodic") {
+    o.periodic = true;
+    o.fixed_root = true;
+    o.root_half_width = 1.0;
+  }
   kifmm::KernelSpec spec;
   kifmm::FmmEvaluator<kifmm::LaplaceKernel> ev(kifmm::LaplaceKernel{}, spec, o);
   kifmm::MpiCommunicator comm(MPI_COMM_WORLD);

@@ -98,7 +98,7 @@ def main():
         b_red = 2 * 8 * nsurf * frontier     # ring allreduce sends about twice the buffer
         b_small = 2 * 16 * 8 ** level + 8 * 26   # count reductions, requests
         nbytes = b_ghost + b_red + b_small
-        msgs = 4 * 2 * math.log2(p) + 2 * 26 + p + 2 * level   # allreduces, neighbour messages, alltoall of counts
+        msgs = 4 * 2 * math.log2(p) + 2 * 26 + 2 * level   # allreduces, neighbour messages (sparse exchange: no O(P) counts)
         t_comm = ALPHA * msgs + nbytes / BETA
         return level, h, t_comp, nbytes, t_comm
 

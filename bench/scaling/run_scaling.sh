@@ -3,7 +3,7 @@
 #   bash bench/scaling/run_scaling.sh [build dir] [max N]
 # 1 and 2 ranks x 1 and 2 threads at N = 1e5 and 1e6 (uniform, order 6, 3 timed evaluations
 # after a warm-up), then bytes sent per rank for P = 1..8 (oversubscribed: only the bytes and
-# ghost counts mean something there, not the times). Appends JSON lines to
+# ghost counts mean something there, not the times), also with periodic boundaries. Appends JSON lines to
 # bench/scaling/results/scaling.jsonl (one per run, with the load average).
 set -e
 cd "$(dirname "$0")/../.."
@@ -30,3 +30,8 @@ for N in $Ns; do
   run 8 1 bytes "$N" plummer 7 1
 done
 run 1 1 bytes 1e5 plummer 7 1
+# periodic boundaries ([-1,1]^3 is the periodic cell): bytes and ghosts per rank, 1-8 ranks
+for np in 1 2 3 4 6 8; do run "$np" 1 bytes-periodic 1e5 periodic 6 1; done
+if [ "$NMAX" = "1e6" ]; then
+  for np in 2 4 8; do run "$np" 1 bytes-periodic 1e6 periodic 6 1; done
+fi

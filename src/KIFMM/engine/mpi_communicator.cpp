@@ -12,40 +12,70 @@ int checked(std::size_t n)
   return (int) n;
 }
 
-template <class T>
-void exchange(MPI_Comm comm, int size, MPI_Datatype type, const std::vector<std::vector<T>> &send,
-              std::vector<std::vector<T>> &recv, std::size_t &bytes)
-{
-  std::vector<int> scount(size), rcount(size), sdispl(size), rdispl(size);
-  std::size_t stotal = 0;
-  for (int r = 0; r < size; ++r) {
-    scount[r] = checked(r < (int) send.size() ? send[r].size() : 0);
-    sdispl[r] = checked(stotal);
-    stotal += scount[r];
-  }
-  MPI_Alltoall(scount.data(), 1, MPI_INT, rcount.data(), 1, MPI_INT, comm);
-  std::size_t rtotal = 0;
-  for (int r = 0; r < size; ++r) {
-    rdispl[r] = checked(rtotal);
-    rtotal += rcount[r];
-  }
-  std::vector<T> sbuf(stotal), rbuf(rtotal);
-  for (int r = 0; r < size; ++r)
-    if (scount[r] > 0) std::copy(send[r].begin(), send[r].end(), sbuf.begin() + sdispl[r]);
-  MPI_Alltoallv(sbuf.data(), scount.data(), sdispl.data(), type, rbuf.data(), rcount.data(), rdispl.data(), type, comm);
-  recv.assign(size, {});
-  for (int r = 0; r < size; ++r) recv[r].assign(rbuf.begin() + rdispl[r], rbuf.begin() + rdispl[r] + rcount[r]);
-  int me = 0;
-  MPI_Comm_rank(comm, &me);
-  for (int r = 0; r < size; ++r)
-    if (r != me) bytes += sizeof(T) * (std::size_t) scount[r] + sizeof(int);
-}
 }    // namespace
 
-MpiCommunicator::MpiCommunicator(MPI_Comm comm) : comm_(comm)
+MpiCommunicator::MpiCommunicator(MPI_Comm comm)
 {
+  MPI_Comm_dup(comm, &comm_);
   MPI_Comm_rank(comm_, &rank_);
   MPI_Comm_size(comm_, &size_);
+}
+
+MpiCommunicator::~MpiCommunicator()
+{
+  int finalized = 0;
+  MPI_Finalized(&finalized);
+  if (!finalized && comm_ != MPI_COMM_NULL) MPI_Comm_free(&comm_);
+}
+
+// Sparse exchange (NBX): a synchronous send per non-empty message; receive whatever arrives
+// (probe: source and size); when this rank's sends are all matched, enter a non-blocking
+// barrier; when the barrier completes every rank's sends have been received. A rank can leave
+// while others still probe, so the next exchange uses the other tag: it can start only after
+// every rank has entered this exchange's barrier, i.e. left the previous exchange.
+template <class T>
+void MpiCommunicator::exchange(MPI_Datatype type, const std::vector<std::vector<T>> &send,
+                               std::vector<std::vector<T>> &recv)
+{
+  const int tag = 0x4b46 + (exchanges_++ & 1);
+  recv.assign(size_, {});
+  std::vector<MPI_Request> sends;
+  for (int r = 0; r < size_ && r < (int) send.size(); ++r) {
+    if (send[r].empty()) continue;
+    if (r == rank_) {
+      recv[r] = send[r];
+      continue;
+    }
+    sends.emplace_back();
+    MPI_Issend(send[r].data(), checked(send[r].size()), type, r, tag, comm_, &sends.back());
+    bytes_sent_ += sizeof(T) * send[r].size();
+  }
+  MPI_Request barrier = MPI_REQUEST_NULL;
+  bool in_barrier = false;
+  for (;;) {
+    int flag = 0;
+    MPI_Status st;
+    MPI_Iprobe(MPI_ANY_SOURCE, tag, comm_, &flag, &st);
+    if (flag) {
+      int count = 0;
+      MPI_Get_count(&st, type, &count);
+      std::vector<T> &v = recv[st.MPI_SOURCE];
+      v.resize(count);
+      MPI_Recv(v.data(), count, type, st.MPI_SOURCE, tag, comm_, MPI_STATUS_IGNORE);
+      continue;
+    }
+    int done = 0;
+    if (!in_barrier) {
+      MPI_Testall((int) sends.size(), sends.data(), &done, MPI_STATUSES_IGNORE);
+      if (done) {
+        MPI_Ibarrier(comm_, &barrier);
+        in_barrier = true;
+      }
+    } else {
+      MPI_Test(&barrier, &done, MPI_STATUS_IGNORE);
+      if (done) break;
+    }
+  }
 }
 
 void MpiCommunicator::allreduce_sum(double *data, std::size_t n)
@@ -84,12 +114,12 @@ void MpiCommunicator::allgatherv(const std::vector<int> &mine, std::vector<int> 
 
 void MpiCommunicator::alltoallv(const std::vector<std::vector<double>> &send, std::vector<std::vector<double>> &recv)
 {
-  exchange(comm_, size_, MPI_DOUBLE, send, recv, bytes_sent_);
+  exchange(MPI_DOUBLE, send, recv);
 }
 
 void MpiCommunicator::alltoallv(const std::vector<std::vector<int>> &send, std::vector<std::vector<int>> &recv)
 {
-  exchange(comm_, size_, MPI_INT, send, recv, bytes_sent_);
+  exchange(MPI_INT, send, recv);
 }
 
 }    // namespace kifmm

@@ -1,5 +1,9 @@
 // kifmm::Communicator over an MPI communicator (library kifmm_engine_mpi; the engine itself
 // does not depend on MPI). Counts of more than INT_MAX elements are refused (exception).
+// It works on a duplicate of the given communicator (its own tag space). alltoallv is a sparse
+// exchange: only the non-empty messages are sent (synchronous sends, probe and receive, then a
+// non-blocking barrier once this rank's sends are matched: the "NBX" consensus of Hoefler,
+// Siebert and Lumsdaine 2010), so no rank handles O(P) counts.
 #pragma once
 
 #include "communicator.h"
@@ -11,6 +15,9 @@ namespace kifmm {
 class MpiCommunicator : public Communicator {
  public:
   explicit MpiCommunicator(MPI_Comm comm);
+  ~MpiCommunicator() override;
+  MpiCommunicator(const MpiCommunicator &) = delete;
+  MpiCommunicator &operator=(const MpiCommunicator &) = delete;
   int rank() const override { return rank_; }
   int size() const override { return size_; }
   void allreduce_sum(double *data, std::size_t n) override;
@@ -21,8 +28,11 @@ class MpiCommunicator : public Communicator {
   void alltoallv(const std::vector<std::vector<int>> &send, std::vector<std::vector<int>> &recv) override;
 
  private:
-  MPI_Comm comm_;
+  MPI_Comm comm_ = MPI_COMM_NULL;
   int rank_ = 0, size_ = 1;
+  int exchanges_ = 0;    // alltoallv calls so far: consecutive ones use different tags
+  template <class T>
+  void exchange(MPI_Datatype type, const std::vector<std::vector<T>> &send, std::vector<std::vector<T>> &recv);
 };
 
 }    // namespace kifmm

@@ -19,15 +19,6 @@ using namespace kifmm_test;
 
 namespace {
 
-Points neutral_uniform(std::size_t n, unsigned seed)
-{
-  Points p = uniform_cube(n, seed);
-  double s = 0;
-  for (double q : p.q) s += q;
-  for (double &q : p.q) q -= s / n;
-  return p;
-}
-
 kifmm::Options cube_opts(int order, int leaf, bool periodic)
 {
   kifmm::Options o;
@@ -48,7 +39,7 @@ TEST(TreeChoice, ModelCountsMatchTheListsOfRealTrees)
 {
   for (bool periodic : {false, true})
     for (auto [n, depth] : {std::pair<std::size_t, int>{3000, 1}, {10000, 2}, {30000, 2}, {30000, 3}}) {
-      const Points p = neutral_uniform(n, 7);
+      const Points p = neutral(uniform_cube(n, 7));
       kifmm::Octree tree;
       kifmm::RootBox root;
       build_octree(tree, root, n, p.xyz.data(), n, p.xyz.data(), kifmm::leaf_size_for_depth(n, depth), 20);
@@ -102,16 +93,15 @@ TEST(TreeChoice, ChosenLeafGivesTheModelsDepth)
         EXPECT_GT(kifmm::modelled_cost(order, n, true, c.depth), kifmm::modelled_cost(order, n, false, c.depth));
       }
   for (bool periodic : {false, true})
-    for (int order : {4, 6, 8})
-      for (std::size_t n : {10000, 30000, 100000}) {
-        const kifmm::TreeChoice c = kifmm::choose_tree(order, n, periodic);
-        const Points p = neutral_uniform(n, 11);
-        auto ev = kifmm::make_evaluator(KernelSpec{}, cube_opts(order, c.leaf_size, periodic));
-        std::vector<double> pot(n), g(3 * n);
-        ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());
-        EXPECT_EQ(ev->stats().depth, c.depth) << "order " << order << " n " << n << " periodic " << periodic;
-        EXPECT_EQ(ev->stats().n_leaves, std::size_t(1) << (3 * c.depth));
-      }
+    for (auto [order, n] : {std::pair<int, std::size_t>{4, 10000}, {6, 30000}, {8, 30000}, {5, 100000}}) {
+      const kifmm::TreeChoice c = kifmm::choose_tree(order, n, periodic);
+      const Points p = neutral(uniform_cube(n, 11));
+      auto ev = kifmm::make_evaluator(KernelSpec{}, cube_opts(order, c.leaf_size, periodic));
+      std::vector<double> pot(n), g(3 * n);
+      ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());
+      EXPECT_EQ(ev->stats().depth, c.depth) << "order " << order << " n " << n << " periodic " << periodic;
+      EXPECT_EQ(ev->stats().n_leaves, std::size_t(1) << (3 * c.depth));
+    }
 }
 
 // Errors of evaluations with the chosen tree stay within the requested accuracy (the order
@@ -122,7 +112,7 @@ TEST(TreeChoice, ChosenLeafGivesTheModelsDepth)
 TEST(TreeChoice, ChosenTreesMeetTheRequestedAccuracy)
 {
   const std::size_t n = 20000, ns = 200;
-  const Points p = neutral_uniform(n, 5);
+  const Points p = neutral(uniform_cube(n, 5));
   auto grad_of = [&](int order, int leaf, bool periodic) {
     std::vector<double> pot(n), g(3 * n);
     auto ev = kifmm::make_evaluator(KernelSpec{}, cube_opts(order, leaf, periodic));

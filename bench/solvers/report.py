@@ -439,6 +439,17 @@ def settings_table(recs):
     return "\n".join(lines) + "\n"
 
 
+def limit_runs(recs):
+    """The runs made with a per-run CPU limit other than the profile's (cpu_limit_s)."""
+    std = {600, 300}
+    by = {}
+    for r in recs:
+        c = r.get("cpu_limit_s")
+        if r.get("kind") == "run" and c is not None and c not in std:
+            by.setdefault(c, []).append(f"{r['case']} N = {r['n']} {r['spec']} ({r['status']})")
+    return "; ".join(f"{c:g} s CPU: " + ", ".join(v) for c, v in sorted(by.items()))
+
+
 def ratio_table(recs, cases):
     comps = competitors(recs, cases) + ["direct"]
     hdr = "| case | N |"
@@ -911,7 +922,8 @@ def write_doc(recs, doc, plots, profile, cases_path, results_path):
       "already in the results file are kept):\n")
     w("```sh\nbash bench/solvers/run.sh            # full: bench/solvers/results/ + this file\n"
       "bash bench/solvers/run.sh --quick    # N <= 1e4, minutes, report in the build directory\n"
-      "bash bench/solvers/run.sh --report-only   # tables and plots from the stored results\n```\n")
+      "bash bench/solvers/run.sh --report-only   # tables and plots from the stored results\n"
+      "bash bench/solvers/run.sh --solvers kifmm # kifmm only (new engine; see run.sh)\n```\n")
     w("## Summary: kifmm's speed ratio at matched error (largest N of each case)\n")
     w("How many times faster kifmm is than the best setting of each LAMMPS solver (msm for "
       "open boundaries; ewald and pppm for periodic ones) and than the exact direct sum, for "
@@ -982,10 +994,8 @@ stay comparable between runs made hours apart on the shared machine:
   N^2.25 for ewald, whose k vectors grow as N with a cutoff of a fixed number of spacings:
   161x and 173x measured from 1e4 to 1e5; the setup and 3 more evaluations) exceeds the
   per-run limit of 600 s CPU is recorded as skipped, not run; a run is stopped at 600 s CPU
-  (or 2400 s wall) and recorded as timeout. Exception: the pending periodic runs at
-  N = 1e5 (ewald and pppm on dipole3_periodic, ewald on uniform_periodic) were run later
-  with a limit of 1200 s CPU per run (`run_bench.py --timeout 1200`, `cpu_limit_s` in
-  results.jsonl). Runs measured before that predictor (N^2 for ewald, setup's own
+  (or 2400 s wall) and recorded as timeout (other limits: `cpu_limit_s` in results.jsonl,
+  listed below). Runs judged before that predictor (N^2 for ewald, the setup's own
   evaluation not counted) keep their judgement. The first runs of the campaign (uniform,
   plummer up to N = 1e5, uniform_periodic, plummer_periodic) predicted from wall times at
   any smaller N with N^1.5 for ewald; settings they skipped are judged again by a later
@@ -1009,6 +1019,10 @@ stay comparable between runs made hours apart on the shared machine:
 * Timings are noisy (shared machine, see the load average below): the report compares
   solvers through **ratios of times measured in the same campaign**, never across machines.
 """)
+    lim = limit_runs(recs)
+    if lim:
+        w("Runs with a per-run CPU limit other than the profile's (`run_bench.py --timeout`; "
+          "the pending periodic competitor runs at N = 1e5, measured later): " + lim + "\n")
     w("## Settings of this run\n")
     w(settings_table(recs))
     w("\n## Speed ratio at matched error\n")

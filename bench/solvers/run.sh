@@ -9,13 +9,17 @@
 # Options: --out DIR (results + plots), --doc FILE (report), --build DIR, --bin PATH (no build),
 #   --only CASE[,CASE], --max-n N, --force (rerun what the results file has), --report-only,
 #   --threads T (OMP_NUM_THREADS of the runs, default 1), --commit C (source commit of --bin,
-#   recorded in the results; default: this checkout's HEAD, "+dirty" if src/ has changes).
+#   recorded in the results; default: this checkout's HEAD, "+dirty" if src/ has changes),
+#   --solvers S[,S] (run only these solver names or specs, e.g. kifmm), --timeout SEC (per-run
+#   CPU limit of this invocation). Remeasuring kifmm on a new engine: move its runs out of
+#   results.jsonl into results/kifmm-COMMIT.jsonl (the report compares them), then
+#   `run.sh --solvers kifmm` (same data and reference files: the work directory of the build).
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
 profile=full
 build="${KIFMM_BUILD_DIR:-/work/build-bench}"
-out="" doc="" bin="" only="" maxn="" force="" report_only=0 commit=""
+out="" doc="" bin="" only="" maxn="" force="" report_only=0 commit="" solvers="" timeout=""
 threads="${OMP_NUM_THREADS:-1}"
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -31,6 +35,8 @@ while [ $# -gt 0 ]; do
     --force) force=--force ;;
     --report-only) report_only=1 ;;
     --commit) commit="$2"; shift ;;
+    --solvers) solvers="$2"; shift ;;
+    --timeout) timeout="$2"; shift ;;
     *) echo "run.sh: unknown option $1" >&2; exit 2 ;;
   esac
   shift
@@ -68,7 +74,8 @@ if [ "$report_only" = 0 ]; then
   export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
   "$py" "$here/run_bench.py" --profile "$profile" --bin "$bin" --work "$work" \
     --results "$out/results.jsonl" --threads "$threads" --commit "$commit" --lmp "$lmp" ${only:+--only "$only"} \
-    ${maxn:+--max-n "$maxn"} $force
+    ${maxn:+--max-n "$maxn"} ${solvers:+--solvers "$solvers"} ${timeout:+--timeout "$timeout"} \
+    $force
 fi
 "$py" "$here/report.py" --profile "$profile" --results "$out/results.jsonl" --plots "$out" \
   --doc "$doc"

@@ -450,6 +450,38 @@ def limit_runs(recs):
     return "; ".join(f"{c:g} s CPU: " + ", ".join(v) for c, v in sorted(by.items()))
 
 
+def recheck_table(recs, results_path):
+    """Settings measured again later with the same command, data and reference
+    (results/recheck-*.jsonl next to the results file): stored and new CPU time."""
+    d = os.path.dirname(os.path.abspath(results_path))
+    try:
+        files = sorted(f for f in os.listdir(d) if re.fullmatch(r"recheck-.*\.jsonl", f))
+    except OSError:
+        files = []
+    stored = {(r["case"], r["n"], r["spec"]): r for r in ok_runs(recs)}
+    lines = []
+    for fn in files:
+        with open(os.path.join(d, fn)) as f:
+            for line in f:
+                try:
+                    r = json.loads(line)
+                except json.JSONDecodeError:
+                    continue
+                old = stored.get((r.get("case"), r.get("n"), r.get("spec")))
+                if r.get("status") != "ok" or "c_eval" not in r or old is None:
+                    continue
+                same = r.get("error") == old.get("error")
+                lines.append(f"| {r['case']} | {r['n']} | {r['spec']} | {fmt_t(old['t_eval'])} "
+                             f"({old.get('commit')}, {old.get('date', '?')[5:16]}) | "
+                             f"{fmt_t(r['c_eval'])} ({r.get('date', '?')[5:16]}) | "
+                             f"{r['c_eval'] / old['t_eval']:.2f} | "
+                             f"{'same' if same else fmt_e(r.get('error'))} |")
+    if not lines:
+        return ""
+    return "\n".join(["| case | N | setting | stored CPU eval [s] | re-measured [s] | ratio | "
+                      "error |", "|---|---|---|---|---|---|---|"] + lines) + "\n"
+
+
 def ratio_table(recs, cases):
     comps = competitors(recs, cases) + ["direct"]
     hdr = "| case | N |"
@@ -1025,6 +1057,14 @@ stay comparable between runs made hours apart on the shared machine:
           "the pending periodic competitor runs at N = 1e5, measured later): " + lim + "\n")
     w("## Settings of this run\n")
     w(settings_table(recs))
+    rt = recheck_table(recs, results_path)
+    if rt:
+        w("\nHow well CPU times measured hours apart agree: settings of the campaign measured "
+          "again at the end of the kifmm remeasurement (same command, data and reference; "
+          "results/recheck-*.jsonl, not used elsewhere). The spread is the uncertainty of a "
+          "ratio between the kifmm and the competitor runs, which were measured at different "
+          "times.\n\n")
+        w(rt)
     w("\n## Speed ratio at matched error\n")
     w("""Time of kifmm at the error E and how many times longer each other solver takes for the
 same measured error (larger = kifmm faster; `-`: solver not run on that case; `failed`: every

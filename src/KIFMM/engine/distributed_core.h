@@ -49,21 +49,7 @@ void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, co
   // for the split rule, then keep_targets drops them)
   std::vector<double> kxyz, kq;
   const double *sxyz = dd.xyz.data(), *sq = dd.q.data();
-  std::size_t ns = nl;
-  std::size_t nz = 0;
-  for (std::size_t j = 0; j < nl; ++j) nz += dd.q[j] == 0.0;
-  if (nz > 0) {
-    kxyz.reserve(3 * (nl - nz));
-    kq.reserve(nl - nz);
-    for (std::size_t j = 0; j < nl; ++j)
-      if (dd.q[j] != 0.0) {
-        kxyz.insert(kxyz.end(), &dd.xyz[3 * j], &dd.xyz[3 * j] + 3);
-        kq.push_back(dd.q[j]);
-      }
-    sxyz = kxyz.data();
-    sq = kq.data();
-    ns = kq.size();
-  }
+  const std::size_t ns = nonzero_sources(nl, sxyz, sq, kxyz, kq);
   build_octree(tree_, dd.root, ns, sxyz, nl, dd.xyz.data(), opt_.leaf_size, opt_.max_depth, &dd.top);
   keep_targets(tree_, n);
   sorted_copies(ns, sxyz, sq, n, xyz);
@@ -73,23 +59,10 @@ void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, co
   else build_interaction_lists(tree_, lists_);
   const double t2 = omp_get_wtime();
   stats_.t_lists = t2 - t1;
-  stats_.depth = tree_.depth;
-  stats_.n_cells = tree_.cells.size();
-  stats_.n_leaves = tree_.leaves.size();
-  double t_setup = 0;
-  setup_operators(t_setup);
-  stats_.t_precompute = t_setup;
+  tree_stats_and_operators();
   const double t3 = omp_get_wtime();
-
+  reset_accumulators(n);
   const std::size_t nc = tree_.cells.size();
-  up_equiv_.assign(nc * nsurf_, 0.0);
-  dn_check_.assign(nc * nsurf_, 0.0);
-  dn_equiv_.assign(nc * nsurf_, 0.0);
-  has_local_.assign(nc, 0);
-  tp_.assign(n, 0.0);
-  tgx_.assign(n, 0.0);
-  tgy_.assign(n, 0.0);
-  tgz_.assign(n, 0.0);
   // upward densities only where they are used: cells below the top tree that appear in a V or
   // W list of an own cell (and their subtrees, for M2M), and the frontier cells this rank is
   // responsible for; the top cells get theirs from the reduction below (no P2M of ghost-only
@@ -160,16 +133,7 @@ void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, co
   stats_.t_downward = omp_get_wtime() - t6;
   leaf_pass(pot != nullptr, grad != nullptr);
   if (opt_.periodic) periodic_near(pot != nullptr);
-#pragma omp parallel for schedule(static)
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::size_t j = tree_.trg_order[i];
-    if (pot) pot[j] = tp_[i];
-    if (grad) {
-      grad[3 * j] = tgx_[i];
-      grad[3 * j + 1] = tgy_[i];
-      grad[3 * j + 2] = tgz_[i];
-    }
-  }
+  results_to_input_order(n, pot, grad);
   // a point of nonzero strength meets itself once (not a coincident pair)
   std::size_t self = 0;
   for (std::size_t i = 0; i < n; ++i) self += q[i] != 0.0;

@@ -35,6 +35,26 @@ namespace kifmm {
 // Engine default leaf size (max points per leaf) for an order; see calibration.cpp.
 int default_leaf_size(int order);
 
+// Points of nonzero strength: xyz/q are redirected to copies in kxyz/kq when some strengths
+// are zero (else left as they are); returns their number.
+inline std::size_t nonzero_sources(std::size_t n, const double *&xyz, const double *&q, std::vector<double> &kxyz,
+                                   std::vector<double> &kq)
+{
+  std::size_t nz = 0;
+  for (std::size_t j = 0; j < n; ++j) nz += q[j] == 0.0;
+  if (nz == 0) return n;
+  kxyz.reserve(3 * (n - nz));
+  kq.reserve(n - nz);
+  for (std::size_t j = 0; j < n; ++j)
+    if (q[j] != 0.0) {
+      kxyz.insert(kxyz.end(), xyz + 3 * j, xyz + 3 * j + 3);
+      kq.push_back(q[j]);
+    }
+  xyz = kxyz.data();
+  q = kq.data();
+  return kq.size();
+}
+
 template <class K> class FmmEvaluator : public Evaluator {
  public:
   FmmEvaluator(const K &k, const KernelSpec &spec, const Options &opt) : k_(k), spec_(spec), opt_(opt)
@@ -93,6 +113,12 @@ template <class K> class FmmEvaluator : public Evaluator {
   // P2M/M2M for levels l_hi down to l_lo (m2m_only: non-leaf cells only)
   void upward(int l_hi, int l_lo, bool m2m_only);
   void sorted_copies(std::size_t ns, const double *sxyz, const double *sq, std::size_t nt, const double *txyz);
+  // after the lists: tree sizes into the stats, operators of every level (precompute time)
+  void tree_stats_and_operators();
+  // zero densities, check values and target accumulators for n_trg targets
+  void reset_accumulators(std::size_t n_trg);
+  // target results (sorted order) back to input order
+  void results_to_input_order(std::size_t n_trg, double *pot, double *grad) const;
   void m2l();
   void p2l();
   void downward();
@@ -274,6 +300,43 @@ void FmmEvaluator<K>::sorted_copies(std::size_t ns, const double *sxyz, const do
     tx_[i] = trg_xyz[3 * j];
     ty_[i] = trg_xyz[3 * j + 1];
     tz_[i] = trg_xyz[3 * j + 2];
+  }
+}
+
+template <class K> void FmmEvaluator<K>::tree_stats_and_operators()
+{
+  stats_.depth = tree_.depth;
+  stats_.n_cells = tree_.cells.size();
+  stats_.n_leaves = tree_.leaves.size();
+  double t_setup = 0;
+  setup_operators(t_setup);
+  stats_.t_precompute = t_setup;
+}
+
+template <class K> void FmmEvaluator<K>::reset_accumulators(std::size_t n_trg)
+{
+  const std::size_t nc = tree_.cells.size();
+  up_equiv_.assign(nc * nsurf_, 0.0);
+  dn_check_.assign(nc * nsurf_, 0.0);
+  dn_equiv_.assign(nc * nsurf_, 0.0);
+  has_local_.assign(nc, 0);
+  tp_.assign(n_trg, 0.0);
+  tgx_.assign(n_trg, 0.0);
+  tgy_.assign(n_trg, 0.0);
+  tgz_.assign(n_trg, 0.0);
+}
+
+template <class K> void FmmEvaluator<K>::results_to_input_order(std::size_t n_trg, double *pot, double *grad) const
+{
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < n_trg; ++i) {
+    const std::size_t j = tree_.trg_order[i];
+    if (pot) pot[j] = tp_[i];
+    if (grad) {
+      grad[3 * j] = tgx_[i];
+      grad[3 * j + 1] = tgy_[i];
+      grad[3 * j + 2] = tgz_[i];
+    }
   }
 }
 
@@ -595,23 +658,7 @@ void FmmEvaluator<K>::evaluate(std::size_t n_src, const double *src_xyz, const d
   // drop zero-strength sources
   std::vector<double> kxyz, kq;
   const double *sxyz = src_xyz, *sq = src_q;
-  std::size_t ns = n_src;
-  {
-    std::size_t nz = 0;
-    for (std::size_t j = 0; j < n_src; ++j) nz += src_q[j] == 0.0;
-    if (nz > 0) {
-      kxyz.reserve(3 * (n_src - nz));
-      kq.reserve(n_src - nz);
-      for (std::size_t j = 0; j < n_src; ++j)
-        if (src_q[j] != 0.0) {
-          kxyz.insert(kxyz.end(), src_xyz + 3 * j, src_xyz + 3 * j + 3);
-          kq.push_back(src_q[j]);
-        }
-      sxyz = kxyz.data();
-      sq = kq.data();
-      ns = kq.size();
-    }
-  }
+  const std::size_t ns = nonzero_sources(n_src, sxyz, sq, kxyz, kq);
   stats_.n_sources = ns;
   if (ns == 0) return;
   const bool same_arrays = src_xyz == trg_xyz;
@@ -639,24 +686,9 @@ void FmmEvaluator<K>::evaluate(std::size_t n_src, const double *src_xyz, const d
     plan_mutual_open(tree_, lists_, mutual_, nsurf_);    // U, and W/X pairs of small leaves
   double t2 = omp_get_wtime();
   stats_.t_lists = t2 - t1;
-  stats_.depth = tree_.depth;
-  stats_.n_cells = tree_.cells.size();
-  stats_.n_leaves = tree_.leaves.size();
-
-  double t_setup = 0;
-  setup_operators(t_setup);
-  stats_.t_precompute = t_setup;
+  tree_stats_and_operators();
   double t3 = omp_get_wtime();
-
-  const std::size_t nc = tree_.cells.size();
-  up_equiv_.assign(nc * nsurf_, 0.0);
-  dn_check_.assign(nc * nsurf_, 0.0);
-  dn_equiv_.assign(nc * nsurf_, 0.0);
-  has_local_.assign(nc, 0);
-  tp_.assign(n_trg, 0.0);
-  tgx_.assign(n_trg, 0.0);
-  tgy_.assign(n_trg, 0.0);
-  tgz_.assign(n_trg, 0.0);
+  reset_accumulators(n_trg);
   upward(tree_.depth, first_level(), false);
   double t4 = omp_get_wtime();
   stats_.t_upward = t4 - t3;
@@ -673,17 +705,7 @@ void FmmEvaluator<K>::evaluate(std::size_t n_src, const double *src_xyz, const d
   mutual_.clear();    // (evaluate_distributed's leaf pass is one-sided)
   if (opt_.periodic) periodic_near(pot != nullptr);
 
-  // results back in input order
-#pragma omp parallel for schedule(static)
-  for (std::size_t i = 0; i < n_trg; ++i) {
-    const std::size_t j = tree_.trg_order[i];
-    if (pot) pot[j] = tp_[i];
-    if (grad) {
-      grad[3 * j] = tgx_[i];
-      grad[3 * j + 1] = tgy_[i];
-      grad[3 * j + 2] = tgz_[i];
-    }
-  }
+  results_to_input_order(n_trg, pot, grad);
   // self pairs (same arrays) are not coincident pairs
   if (same_arrays && n_src == n_trg && stats_.coincident_pairs >= ns) stats_.coincident_pairs -= ns;
   stats_.tree_bytes = tree_.bytes() + lists_.bytes() +

@@ -450,32 +450,40 @@ def limit_runs(recs):
     return "; ".join(f"{c:g} s CPU: " + ", ".join(v) for c, v in sorted(by.items()))
 
 
-def recheck_table(recs, results_path):
-    """Settings measured again later with the same command, data and reference
-    (results/recheck-*.jsonl next to the results file): stored and new CPU time."""
+def side_records(results_path, pattern):
+    """Records of the JSON-lines files next to the results file whose names match pattern
+    (archived or re-measured runs that the report shows apart)."""
     d = os.path.dirname(os.path.abspath(results_path))
     try:
-        files = sorted(f for f in os.listdir(d) if re.fullmatch(r"recheck-.*\.jsonl", f))
+        files = sorted(f for f in os.listdir(d) if re.fullmatch(pattern, f))
     except OSError:
         files = []
-    stored = {(r["case"], r["n"], r["spec"]): r for r in ok_runs(recs)}
-    lines = []
+    out = []
     for fn in files:
         with open(os.path.join(d, fn)) as f:
             for line in f:
                 try:
-                    r = json.loads(line)
+                    out.append(json.loads(line))
                 except json.JSONDecodeError:
                     continue
-                old = stored.get((r.get("case"), r.get("n"), r.get("spec")))
-                if r.get("status") != "ok" or "c_eval" not in r or old is None:
-                    continue
-                same = r.get("error") == old.get("error")
-                lines.append(f"| {r['case']} | {r['n']} | {r['spec']} | {fmt_t(old['t_eval'])} "
-                             f"({old.get('commit')}, {old.get('date', '?')[5:16]}) | "
-                             f"{fmt_t(r['c_eval'])} ({r.get('date', '?')[5:16]}) | "
-                             f"{r['c_eval'] / old['t_eval']:.2f} | "
-                             f"{'same' if same else fmt_e(r.get('error'))} |")
+    return out
+
+
+def recheck_table(recs, results_path):
+    """Settings measured again later with the same command, data and reference
+    (results/recheck-*.jsonl next to the results file): stored and new CPU time."""
+    stored = {(r["case"], r["n"], r["spec"]): r for r in ok_runs(recs)}
+    lines = []
+    for r in side_records(results_path, r"recheck-.*\.jsonl"):
+        old = stored.get((r.get("case"), r.get("n"), r.get("spec")))
+        if r.get("status") != "ok" or "c_eval" not in r or old is None:
+            continue
+        same = r.get("error") == old.get("error")
+        lines.append(f"| {r['case']} | {r['n']} | {r['spec']} | {fmt_t(old['t_eval'])} "
+                     f"({old.get('commit')}, {old.get('date', '?')[5:16]}) | "
+                     f"{fmt_t(r['c_eval'])} ({r.get('date', '?')[5:16]}) | "
+                     f"{r['c_eval'] / old['t_eval']:.2f} | "
+                     f"{'same' if same else fmt_e(r.get('error'))} |")
     if not lines:
         return ""
     return "\n".join(["| case | N | setting | stored CPU eval [s] | re-measured [s] | ratio | "
@@ -665,21 +673,8 @@ def engine_change_table(recs, results_path):
     """kifmm runs of this report against the archived kifmm runs of an earlier engine
     (results/kifmm-COMMIT.jsonl next to the results file): same case, N and spec, same data
     and reference files; the ratio of CPU times per evaluation and of the errors."""
-    d = os.path.dirname(os.path.abspath(results_path))
-    try:
-        files = sorted(f for f in os.listdir(d) if re.fullmatch(r"kifmm-.*\.jsonl", f))
-    except OSError:
-        files = []
-    old = {}
-    for fn in files:
-        with open(os.path.join(d, fn)) as f:
-            for line in f:
-                try:
-                    r = json.loads(line)
-                except json.JSONDecodeError:
-                    continue
-                if r.get("kind") == "run" and r.get("status") == "ok" and "c_eval" in r:
-                    old[(r["case"], r["n"], r["spec"])] = r
+    old = {(r["case"], r["n"], r["spec"]): r for r in side_records(results_path, r"kifmm-.*\.jsonl")
+           if r.get("kind") == "run" and r.get("status") == "ok" and "c_eval" in r}
     if not old:
         return ""
     lines = ["| case | N | settings | CPU eval new / old: median (min - max) | "

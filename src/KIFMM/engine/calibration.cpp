@@ -114,7 +114,9 @@ TreeCounts uniform_tree_counts(std::size_t n, int depth, bool periodic)
 
 int leaf_size_for_depth(std::size_t n, int depth)
 {
-  const double leaf = std::ceil(std::sqrt(8.0) * (double) n / std::ldexp(1.0, 3 * depth));
+  const double m = (double) n / std::ldexp(1.0, 3 * depth);
+  const double lo = m + 6 * std::sqrt(m) + 3, hi = 8 * m - 6 * std::sqrt(8 * m);
+  const double leaf = std::ceil(depth == 0 || lo <= hi ? lo : std::sqrt(8.0) * m);
   return (int) std::max(1.0, std::min(leaf, (double) INT_MAX));
 }
 

@@ -110,7 +110,7 @@ Choice choose_order(const KernelSpec &kernel, double rel_force_error, bool perio
 // Tree for n points at this order and boundary: the depth of least modelled CPU time for n
 // points spread uniformly over the root cube (cost_model.h: near-field pairs, M2L translations
 // and cells per depth, constants fitted to measured evaluations), and the leaf size that gives
-// that depth (about 2.8 n / 8^depth). Deterministic: the same n gives the same tree on every
+// that depth (m + 6 sqrt(m) + 3, m = n / 8^depth). Deterministic: the same n gives the same tree on every
 // rank. Used by kspace_style kifmm when no leaf size is given.
 struct TreeChoice {
   int leaf_size;

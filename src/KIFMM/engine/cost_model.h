@@ -32,8 +32,8 @@ TreeCounts uniform_tree_counts(std::size_t n, int depth, bool periodic);
 // of depth d - 1, 8 m points, exceed it by 6 of their standard deviations); when m is too
 // small for both margins, sqrt(8) m (geometrically halfway). The smallest such threshold:
 // clustered points, whose dense leaves fill up to it, then stay near the occupancy that is
-// optimal for uniform ones (Plummer spheres: within ~4% of the per-order calibrated leaf at
-// 1e4-3e4 points, where sqrt(8) m was up to 1.14x slower).
+// optimal for uniform ones (Plummer spheres, 1e4-1e5 points, orders 4-8: 0.80-1.23 of the CPU
+// time at the per-order calibrated leaf; sqrt(8) m was worse at 1e4-3e4).
 int leaf_size_for_depth(std::size_t n, int depth);
 
 struct CostConstants {

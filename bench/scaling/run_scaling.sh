@@ -15,7 +15,7 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_
 run() {
   local np=$1 th=$2 tag=$3
   shift 3
-  OMP_NUM_THREADS=$th nice -n 10 mpirun --oversubscribe -np "$np" -x OMP_NUM_THREADS \
+  OMP_NUM_THREADS=$th nice -n 10 mpirun --bind-to none --oversubscribe -np "$np" -x OMP_NUM_THREADS \
     "$B/bench/scaling/bench_scaling" "$@" | sed "s/}\$/, \"tag\": \"$tag\"}/" | tee -a "$OUT"
 }
 Ns="1e5"

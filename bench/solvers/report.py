@@ -517,6 +517,11 @@ def recheck_table(recs, results_path):
                       "error |", "|---|---|---|---|---|---|---|"] + lines) + "\n"
 
 
+def median(v):
+    """Median of a sorted, non-empty list."""
+    return v[len(v) // 2] if len(v) % 2 else 0.5 * (v[len(v) // 2 - 1] + v[len(v) // 2])
+
+
 def recheck_summary(recs, results_path):
     """One sentence per session of re-measurements: median and range of re-measured / stored
     CPU time of the competitors' settings and of kifmm's."""
@@ -537,7 +542,7 @@ def recheck_summary(recs, results_path):
         for g in ("competitors", "kifmm"):
             v = sorted(groups.get(g, []))
             if v:
-                med = v[len(v) // 2] if len(v) % 2 else 0.5 * (v[len(v) // 2 - 1] + v[len(v) // 2])
+                med = median(v)
                 parts.append(f"{g} ({len(v)} settings) {med:.2f} ({v[0]:.2f} - {v[-1]:.2f})")
         out.append(f"Re-measured with the binary of {commit} ({day}), new / stored CPU time per "
                    "evaluation, median (min - max): " + ", ".join(parts) + ".")
@@ -730,14 +735,20 @@ def scaling_table(recs, cases):
     return "\n".join(lines) + "\n"
 
 
+def archived_runs(results_path, archive):
+    """(case, n, spec) -> ok kifmm run with a CPU time in the archive file `archive` (a
+    results/kifmm-COMMIT.jsonl next to the results file)."""
+    return {(r["case"], r["n"], r["spec"]): r
+            for r in side_records(results_path, re.escape(archive))
+            if r.get("kind") == "run" and r.get("status") == "ok" and "c_eval" in r}
+
+
 def engine_change_table(recs, results_path, archive):
     """kifmm runs of this report against the archived kifmm runs of an earlier engine
     (results/kifmm-COMMIT.jsonl next to the results file, the file name `archive`): same case,
     N and spec, same data and reference files; the ratio of CPU times per evaluation and of
     the errors."""
-    old = {(r["case"], r["n"], r["spec"]): r
-           for r in side_records(results_path, re.escape(archive))
-           if r.get("kind") == "run" and r.get("status") == "ok" and "c_eval" in r}
+    old = archived_runs(results_path, archive)
     if not old:
         return ""
     lines = ["| case | N | settings | CPU eval new / old: median (min - max) | "
@@ -751,8 +762,7 @@ def engine_change_table(recs, results_path, archive):
                 continue
             tr = sorted(a["t_eval"] / b["c_eval"] for a, b in pairs if b["c_eval"] > 0)
             er = sorted(a["error"] / b["error"] for a, b in pairs if b.get("error"))
-            med = tr[len(tr) // 2] if len(tr) % 2 else 0.5 * (tr[len(tr) // 2 - 1] +
-                                                             tr[len(tr) // 2])
+            med = median(tr)
             ecol = f"{er[0]:.3g} - {er[-1]:.3g}" if er else "-"
             oc = ", ".join(sorted({str(b.get("commit")) for _, b in pairs}))
             lines.append(f"| {case} | {nlabel(n, pairs[0][0]['natoms'])} | {len(pairs)} | "
@@ -771,9 +781,7 @@ def same_atoms(a, b):
 def depth_change_summary(recs, results_path, archive):
     """One paragraph: the CPU time ratios new / archived grouped by how the tree depth changed
     (same depth at N >= 5e4; deeper; shallower; depth 0 now at N ~ 1e3)."""
-    old = {(r["case"], r["n"], r["spec"]): r
-           for r in side_records(results_path, re.escape(archive))
-           if r.get("kind") == "run" and r.get("status") == "ok" and "c_eval" in r}
+    old = archived_runs(results_path, archive)
     groups = {"same": [], "deeper": [], "shallower": [], "zero": []}
     for r in ok_runs(recs, solver="kifmm"):
         o = old.get((r["case"], r["n"], r["spec"]))
@@ -791,7 +799,7 @@ def depth_change_summary(recs, results_path, archive):
 
     def st(v):
         v = sorted(v)
-        med = v[len(v) // 2] if len(v) % 2 else 0.5 * (v[len(v) // 2 - 1] + v[len(v) // 2])
+        med = median(v)
         return f"{len(v)} settings, median {med:.2f} ({v[0]:.2f} - {v[-1]:.2f})"
     words = {"same": "N >= 5e4 with the same tree depth as before",
              "deeper": "N >= 5e4 where the cost model chose a deeper tree",

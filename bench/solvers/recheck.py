@@ -16,7 +16,7 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from run_bench import append_result, load_results, run_child  # noqa: E402
+from run_bench import append_result, load_results, run_child, run_command  # noqa: E402
 
 
 def main():
@@ -58,12 +58,8 @@ def main():
             rc = 1
             continue
         screen = os.path.join(args.work, "logs", f"recheck_{tag}_{spec.replace(':', '_')}.log")
-        cmd = [args.bin, "run", "--data", data, "--ref", ref, "--solver", spec,
-               "--clump", str(old.get("clump", 1)), "--atom-style", "charge",
-               "--repeats", str(lim["repeats"]), "--min-time", str(lim["min_time_s"]),
-               "--screen", screen]
-        if old.get("periodic"):
-            cmd.append("--periodic")
+        cmd = run_command(args.bin, data, ref, spec, old.get("clump", 1), "charge", lim, screen,
+                          old.get("periodic"))
         t0 = time.time()
         st, res, msg = run_child(cmd, env, lim["timeout_s"], lim["memory_limit_mb"], screen)
         rec = {"kind": "recheck", "case": case, "n": n, "spec": spec,

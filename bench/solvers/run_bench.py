@@ -74,6 +74,18 @@ def cpu_s(pid):
 WALL_FACTOR = 4.0    # a child is also stopped at this many times the limit in wall time
 
 
+def run_command(binary, data, ref, spec, clump, atom_style, lim, screen, periodic):
+    """The bench_solvers command of one measured run (repeats and minimum time from the
+    limits of cases.json)."""
+    cmd = [binary, "run", "--data", data, "--ref", ref, "--solver", spec,
+           "--clump", str(clump), "--atom-style", atom_style,
+           "--repeats", str(lim["repeats"]), "--min-time", str(lim["min_time_s"]),
+           "--screen", screen]
+    if periodic:
+        cmd.append("--periodic")
+    return cmd
+
+
 def run_child(cmd, env, timeout, mem_limit_mb, screen):
     """Runs cmd; returns (status, result dict or None, message). Kills the child (and only it)
     when it exceeds the memory limit or the time limit: `timeout` seconds of CPU time (the
@@ -406,12 +418,8 @@ def main():
                     log(f"{tag} {spec}: skipped, {why}")
                     continue
                 screen = os.path.join(args.work, "logs", f"{tag}_{spec.replace(':', '_')}.log")
-                cmd = [args.bin, "run", "--data", data, "--ref", ref, "--solver", spec,
-                       "--clump", str(clump), "--atom-style", atom_style,
-                       "--repeats", str(lim["repeats"]), "--min-time", str(lim["min_time_s"]),
-                       "--screen", screen]
-                if periodic:
-                    cmd.append("--periodic")
+                cmd = run_command(args.bin, data, ref, spec, clump, atom_style, lim, screen,
+                                  periodic)
                 t0 = time.time()
                 st, res, msg = run_child(cmd, env, timeout, lim["memory_limit_mb"], screen)
                 rec = {"kind": "run", "case": name, "n": n, "spec": spec, "solver": solver,

@@ -42,4 +42,23 @@ inline Points plummer(std::size_t n, unsigned seed)
   return p;
 }
 
+// Plummer sphere of scale a in the unit cube (centre 0.5, radii cut at 0.45), charges +-1
+// alternating (as the bench/solvers "plummer" configuration, unittest/fixture/configurations.cpp)
+inline Points plummer_box(std::size_t n, unsigned seed, double a)
+{
+  std::mt19937_64 g(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Points p;
+  while (p.size() < n) {
+    const double m = u(g);
+    if (m < 1e-10 || m > 1 - 1e-10) continue;
+    const double r = a / std::sqrt(std::pow(m, -2.0 / 3.0) - 1.0);
+    if (r > 0.45) continue;
+    const double z = 2 * u(g) - 1, ph = 2 * M_PI * u(g), s = std::sqrt(1 - z * z);
+    p.xyz.insert(p.xyz.end(), {0.5 + r * s * std::cos(ph), 0.5 + r * s * std::sin(ph), 0.5 + r * z});
+    p.q.push_back(p.size() % 2 ? -1.0 : 1.0);
+  }
+  return p;
+}
+
 }    // namespace bench

@@ -9,9 +9,11 @@
 // calibration.cpp, see cost_model.h): for each order, single-thread CPU time (minimum of
 // --reps) of evaluations of uniform points in the cube [-1,1]^3 (neutral charges, sources =
 // targets, fixed root) for both boundaries at N = 1e4, 3e4 (and 1e5 for orders <= 8) and the
-// depths with 8 to 600 points per leaf (leaf_size_for_depth), then the non-negative least-squares
-// fit (relative residuals) of
-// cost = point*N + pair*near + translation*trans + cell*cells to them (uniform_tree_counts).
+// depths with 8 to 600 points per leaf (leaf_size_for_depth), and of clustered points (open,
+// bounding cube; two Plummer spheres, N = 1e4, 3e4, leaf sizes 16 .. 1024), then the
+// non-negative least-squares fit (relative residuals) of cost = point*N + pair*(near +
+// self_extra*self) + translation*trans + cell*cells + entry*entries to them, with the counts of
+// the actual trees (actual_tree_counts, cost_model.h).
 // Prints the table rows (ns) on stdout, the measured and fitted times on stderr.
 //
 // `calibrate --periodic-errors [--orders 3-13]` measures the periodic column of the choose_order
@@ -55,62 +57,91 @@ double cpu_now()
 
 int cost_fit(int order_lo, int order_hi, int reps)
 {
-  std::printf("    // order, point, pair, translation, cell (ns)   [rms relative residual of the fit]\n");
+  std::printf("    // order, point, pair, translation, cell, entry (ns)   [rms relative residual of the fit]\n");
+  constexpr int K = 5;
+  // point sets: uniform in [-1,1]^3 (both boundaries; depths with 8 to 600 points per leaf) and
+  // clustered ones (open; leaf sizes 16 .. 1024): a Plummer sphere of scale 0.05 in the unit
+  // cube (the bench/solvers "plummer" case) and bench::plummer (scale 1, cut at r = 50)
+  struct Set {
+    std::string name;
+    bench::Points p;
+    bool clustered;
+  };
+  std::vector<Set> sets;
+  for (std::size_t n : {10000, 30000, 100000}) {
+    bench::Points p = bench::uniform(n, 2024);
+    double s = 0;
+    for (double q : p.q) s += q;
+    for (double &q : p.q) q -= s / n;
+    sets.push_back({"uniform", std::move(p), false});
+  }
+  for (std::size_t n : {10000, 30000}) {
+    sets.push_back({"plummer0.05", bench::plummer_box(n, 7, 0.05), true});
+    sets.push_back({"plummer", bench::plummer(n, 8), true});
+  }
   for (int order = order_lo; order <= order_hi; ++order) {
-    std::vector<std::array<double, 4>> rows;
+    std::vector<std::array<double, K>> rows;
     std::vector<double> times;
-    std::vector<std::size_t> sizes{10000, 30000};
-    if (order <= 8) sizes.push_back(100000);
-    for (std::size_t n : sizes) {
-      bench::Points p = bench::uniform(n, 2024);
-      double s = 0;
-      for (double q : p.q) s += q;
-      for (double &q : p.q) q -= s / n;
+    std::vector<std::string> labels;
+    for (const Set &set : sets) {
+      const bench::Points &p = set.p;
+      const std::size_t n = p.size();
+      if (n > 30000 && order > 8) continue;
       std::vector<double> pot(n), g(3 * n);
-      for (int depth = 1; depth <= 8; ++depth) {
-        const double m = n / std::ldexp(1.0, 3 * depth);
-        if (m < 8 || m > 600) continue;
-        for (int periodic = 0; periodic < 2; ++periodic) {
-          Options o;
-          o.order = order;
-          o.leaf_size = leaf_size_for_depth(n, depth);
+      std::vector<std::pair<int, int>> trees;    // (leaf, periodic)
+      if (set.clustered) {
+        for (int leaf : {16, 32, 64, 128, 256, 512, 1024}) trees.push_back({leaf, 0});
+      } else {
+        for (int depth = 1; depth <= 8; ++depth) {
+          const double m = n / std::ldexp(1.0, 3 * depth);
+          if (m < 8 || m > 600) continue;
+          trees.push_back({leaf_size_for_depth(n, depth), 0});
+          trees.push_back({leaf_size_for_depth(n, depth), 1});
+        }
+      }
+      for (auto [leaf, periodic] : trees) {
+        Options o;
+        o.order = order;
+        o.leaf_size = leaf;
+        if (!set.clustered) {
           o.fixed_root = true;
           o.root_half_width = 1.0;
-          o.periodic = periodic;
-          auto ev = make_evaluator(KernelSpec{}, o);
-          ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());    // operators
-          double t = 1e30;
-          for (int r = 0; r < reps; ++r) {
-            const double c0 = cpu_now();
-            ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());
-            t = std::min(t, cpu_now() - c0);
-          }
-          if (ev->stats().depth != depth)
-            std::fprintf(stderr, "warning: N %zu leaf %d gave depth %d, not %d\n", n, o.leaf_size,
-                         ev->stats().depth, depth);
-          const TreeCounts c = uniform_tree_counts(n, depth, periodic);
-          rows.push_back({(double) n, c.near_pairs, c.translations, c.cells});
-          times.push_back(t);
         }
+        o.periodic = periodic;
+        auto ev = make_evaluator(KernelSpec{}, o);
+        ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());    // operators
+        double t = 1e30;
+        for (int r = 0; r < reps; ++r) {
+          const double c0 = cpu_now();
+          ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());
+          t = std::min(t, cpu_now() - c0);
+        }
+        const TreeCounts c = actual_tree_counts(KernelSpec{}, o, n, p.xyz.data(), leaf);
+        rows.push_back({(double) n, c.near_pairs + self_pair_extra() * c.self_pairs, c.translations, c.cells, c.entries});
+        times.push_back(t);
+        char b[96];
+        std::snprintf(b, sizeof b, "%s N %zu leaf %d depth %d %s", set.name.c_str(), n, leaf, ev->stats().depth,
+                      periodic ? "periodic" : "open");
+        labels.push_back(b);
       }
     }
     // least squares, relative (each equation divided by its time), columns scaled to O(1)
     const int ne = (int) rows.size();
-    Eigen::MatrixXd A(ne, 4);
+    Eigen::MatrixXd A(ne, K);
     Eigen::VectorXd b(ne);
-    double colscale[4] = {0, 0, 0, 0};
+    double colscale[K] = {0, 0, 0, 0, 0};
     for (int i = 0; i < ne; ++i)
-      for (int k = 0; k < 4; ++k) colscale[k] = std::max(colscale[k], rows[i][k] / times[i]);
+      for (int k = 0; k < K; ++k) colscale[k] = std::max(colscale[k], rows[i][k] / times[i]);
     for (int i = 0; i < ne; ++i) {
-      for (int k = 0; k < 4; ++k) A(i, k) = rows[i][k] / times[i] / colscale[k];
+      for (int k = 0; k < K; ++k) A(i, k) = rows[i][k] / times[i] / colscale[k];
       b(i) = 1.0;
     }
     // non-negative least squares by enumeration: the best fit over the subsets of the columns
     // whose solution has no negative constant (translation and cell terms are nearly collinear)
-    double c[4] = {0, 0, 0, 0}, best = 1e300, rms = 0;
-    for (int mask = 1; mask < 16; ++mask) {
+    double c[K] = {0, 0, 0, 0, 0}, best = 1e300, rms = 0;
+    for (int mask = 1; mask < (1 << K); ++mask) {
       std::vector<int> cols;
-      for (int k = 0; k < 4; ++k)
+      for (int k = 0; k < K; ++k)
         if (mask >> k & 1) cols.push_back(k);
       Eigen::MatrixXd As(ne, (int) cols.size());
       for (std::size_t j = 0; j < cols.size(); ++j) As.col((int) j) = A.col(cols[j]);
@@ -119,19 +150,19 @@ int cost_fit(int order_lo, int order_hi, int reps)
       const double r = (As * x - b).squaredNorm();
       if (r < best) {
         best = r;
-        for (int k = 0; k < 4; ++k) c[k] = 0;
+        for (int k = 0; k < K; ++k) c[k] = 0;
         for (std::size_t j = 0; j < cols.size(); ++j) c[cols[j]] = x((int) j) / colscale[cols[j]];
       }
     }
     for (int i = 0; i < ne; ++i) {
       double f = 0;
-      for (int k = 0; k < 4; ++k) f += c[k] * rows[i][k];
+      for (int k = 0; k < K; ++k) f += c[k] * rows[i][k];
       rms += (f / times[i] - 1) * (f / times[i] - 1);
-      std::fprintf(stderr, "order %d N %.0f %s near %.3g trans %.3g cells %.0f: measured %.4f s, model %.4f s\n",
-                   order, rows[i][0], i % 2 ? "periodic" : "open    ", rows[i][1], rows[i][2], rows[i][3], times[i], f);
+      std::fprintf(stderr, "order %d %s: near %.3g trans %.3g cells %.0f entries %.0f: measured %.4f s, model %.4f s\n",
+                   order, labels[i].c_str(), rows[i][1], rows[i][2], rows[i][3], rows[i][4], times[i], f);
     }
-    std::printf("    {%d, %.4g, %.4g, %.4g, %.4g},    // [%.3f]\n", order, 1e9 * c[0], 1e9 * c[1], 1e9 * c[2],
-                1e9 * c[3], std::sqrt(rms / ne));
+    std::printf("    {%d, %.4g, %.4g, %.4g, %.4g, %.4g},    // [%.3f]\n", order, 1e9 * c[0], 1e9 * c[1], 1e9 * c[2],
+                1e9 * c[3], 1e9 * c[4], std::sqrt(rms / ne));
     std::fflush(stdout);
   }
   return 0;

@@ -144,20 +144,31 @@ void KSpaceKIFMM::init()
     opt.order = c.order;
     est = c.measured_error;
   }
-  // leaf size: given, or the tree depth of least modelled cost for this N and boundary
+  // leaf size: given (kspace_modify kifmm leaf); else one rank: chosen from the atom positions
+  // at the first evaluation of the run (choose_tree_from_atoms: the modelled cost of the actual
+  // trees of a few leaf sizes), until then the uniform choice below or the previous run's
+  // choice; several ranks: each holds only its own atoms, so the tree depth of least modelled
+  // cost for this N spread uniformly, the same on every rank
   kifmm::TreeChoice tree{0, -1, 0.0};
+  tree_choice_pending = false;
+  if (kset.cache_dir == "none")
+    opt.cache_dir.clear();
+  else
+    opt.cache_dir = kset.cache_dir.empty() ? default_cache_dir() : kset.cache_dir;
+  opt.periodic = periodic;
   if (kset.leaf > 0) {
     opt.leaf_size = kset.leaf;
   } else {
     tree = kifmm::choose_tree(opt.order, (std::size_t) atom->natoms, periodic);
     opt.leaf_size = tree.leaf_size;
+    if (!distributed()) {
+      tree_choice_pending = true;
+      if (engine && engine_options.order == opt.order && engine_options.cache_dir == opt.cache_dir &&
+          engine_options.periodic == opt.periodic)
+        opt.leaf_size = engine_options.leaf_size;    // kept until the new choice
+    }
   }
-  if (kset.cache_dir == "none")
-    opt.cache_dir.clear();
-  else
-    opt.cache_dir = kset.cache_dir.empty() ? default_cache_dir() : kset.cache_dir;
 
-  opt.periodic = periodic;
   if (!engine || engine_options.order != opt.order || engine_options.leaf_size != opt.leaf_size ||
       engine_options.cache_dir != opt.cache_dir || engine_options.periodic != opt.periodic) {
     engine = kifmm::make_evaluator(kernel, opt);
@@ -176,8 +187,15 @@ void KSpaceKIFMM::init()
     mesg += fmt::format("  kernel = {}", kifmm_lammps::kernel_name(kset.kernel));
     if (kset.kernel == LongRangeKernel::Gravity) mesg += fmt::format(" (G = {:.8g})", kset.gravity_G);
     if (kset.kernel == LongRangeKernel::Yukawa) mesg += fmt::format(" (kappa = {:.8g})", kset.kappa);
-    mesg += fmt::format("\n  order = {}, leaf size = {}", engine_options.order, engine_options.leaf_size);
-    if (tree.depth >= 0)
+    if (tree_choice_pending)
+      mesg += fmt::format("\n  order = {}, leaf size chosen from the atom positions at the first "
+                          "evaluation (least modelled cost of the actual trees; for {} uniformly "
+                          "spread atoms, {} boundaries: leaf size {}, tree depth {})",
+                          engine_options.order, atom->natoms, periodic ? "periodic" : "open",
+                          tree.leaf_size, tree.depth);
+    else
+      mesg += fmt::format("\n  order = {}, leaf size = {}", engine_options.order, engine_options.leaf_size);
+    if (tree.depth >= 0 && !tree_choice_pending)
       mesg += fmt::format(" (tree depth {} for {} uniformly spread atoms, {} boundaries: least "
                           "modelled cost)",
                           tree.depth, atom->natoms, periodic ? "periodic" : "open");
@@ -211,6 +229,31 @@ void KSpaceKIFMM::setup()
       if (strncmp(line, "MemAvailable:", 13) == 0) memory_limit_mb = std::atof(line + 13) / 1024.0;
     fclose(fp);
   }
+}
+
+// Leaf size from the atom positions (one rank, no leaf size given): the engine builds the trees
+// of a few candidate leaf sizes over these atoms and takes the one of least modelled cost
+// (kifmm::choose_tree(kernel, options, n, xyz)); once per run, at its first evaluation.
+void KSpaceKIFMM::choose_tree_from_atoms()
+{
+  tree_choice_pending = false;
+  const std::size_t n = strength.size();
+  if (n == 0) return;
+  kifmm::Options opt = engine->options();    // the periodic cell is its root (periodic_cell)
+  const double t0 = MPI_Wtime();
+  const kifmm::TreeChoice c = kifmm::choose_tree(engine->kernel(), opt, n, xyz.data());
+  const double t_choice = MPI_Wtime() - t0;
+  if (c.leaf_size != opt.leaf_size) {
+    opt.leaf_size = c.leaf_size;
+    engine = kifmm::make_evaluator(engine->kernel(), opt);
+    engine_options = engine->options();
+    reported_first_evaluation = false;
+  }
+  if (comm->me == 0)
+    utils::logmesg(lmp,
+                   "  KIFMM tree chosen from the positions of {} atoms: leaf size {} (tree depth {}, "
+                   "modelled {:.3g} s per evaluation on one thread; choice {:.3g} s)\n",
+                   n, c.leaf_size, c.depth, c.cost, t_choice);
 }
 
 // Pairs at zero distance are excluded from the sum (never inf); say so once per run.
@@ -318,6 +361,7 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   const std::size_t n = index.size();
 
   if (periodic) periodic_cell();    // the box is the cell (it may have changed)
+  if (tree_choice_pending) choose_tree_from_atoms();
   const bool want_potential = eflag_global || eflag_atom || keep || (periodic && vflag_global);
   pot.assign(want_potential ? n : 0, 0.0);
   grad.assign(3 * n, 0.0);

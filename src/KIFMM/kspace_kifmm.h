@@ -42,6 +42,10 @@ class KSpaceKIFMM : public KSpace {
   double last_measured_error = -1.0;
   bool reported_first_evaluation = false;
   bool warned_coincident = false;
+  // no leaf size given, one rank: the tree is chosen from the atom positions at the first
+  // evaluation of each run (kifmm::choose_tree on the counts of the actual trees)
+  bool tree_choice_pending = false;
+  void choose_tree_from_atoms();
   KIFMMTiming run_timing;
   double memory_limit_mb = 0;    // 0 = unknown: no check
 

@@ -2,11 +2,17 @@
 // per N and boundary (cost_model.h).
 #include "cost_model.h"
 #include "fmm_core.h"
+#include "interaction_lists.h"
 #include "kifmm.h"
+#include "octree.h"
+#include "periodic.h"
+#include "surface.h"
 
 #include <algorithm>
 #include <climits>
 #include <cmath>
+#include <set>
+#include <vector>
 
 namespace kifmm {
 
@@ -24,13 +30,14 @@ struct Row {
 // (2026-11-23): uniform points (made neutral) in the periodic cell, tree of choose_tree, error
 // over all points against order 14 (which agrees with the Ewald sum to 1e-11 .. 4e-11, the
 // value given for order 14), the largest of 2e4 and 1e5 points, seeds 1 and 2 (2e4 points
-// give 2-3 times the errors of 1e5).
+// give 2-3 times the errors of 1e5). Re-measured with the refitted tree choice (OMP_NUM_THREADS=1,
+// same command): identical except order 7 (7.17e-07 -> 1.10e-06: 2e4 points now get depth 3).
 const Row kTable[] = {
     {3, 128, 2.36e-03, 2.04e-03},    // 0.109 s
     {4, 128, 4.17e-04, 3.66e-04},    // 0.159 s
     {5, 128, 4.95e-05, 4.43e-05},    // 0.252 s
     {6, 512, 4.49e-06, 7.10e-06},    // 0.288 s
-    {7, 512, 5.95e-07, 7.17e-07},    // 0.339 s
+    {7, 512, 5.95e-07, 1.10e-06},    // 0.339 s
     {8, 512, 1.23e-07, 1.34e-07},    // 0.375 s
     {9, 512, 1.78e-08, 2.28e-08},    // 0.470 s
     {10, 512, 7.40e-09, 8.31e-09},   // 0.524 s
@@ -64,28 +71,46 @@ Choice choose_order(const KernelSpec &, double rel_force_error, bool periodic)
 
 namespace {
 // Per-order constants of the cost model in nanoseconds: point, near-field pair, M2L translation,
-// cell. Produced by `OMP_NUM_THREADS=1 ./bench/calibrate --cost` (bench/calibrate.cpp): least
-// squares over measured single-thread CPU times of evaluations of uniform points (both
-// boundaries, several N and depths), with the counts of uniform_tree_counts; in brackets the
-// RMS relative residual of the fit. Measured 2026-11-23 (load 4-6 on 2 cores).
+// cell, entry (cost_model.h). Produced by `OMP_NUM_THREADS=1 ./bench/calibrate --cost`
+// (bench/calibrate.cpp): non-negative least squares over measured single-thread CPU times of
+// evaluations of uniform points (both boundaries, several N and depths) and of two Plummer
+// spheres (open, leaf sizes 16-1024), with the counts of their actual trees
+// (actual_tree_counts); in brackets the RMS relative residual of the fit. Measured 2026-11-23
+// (load 2-3 on 2 cores). The translation and cell terms are nearly collinear (a constant that
+// is 0 went to the others).
 struct CostRow {
   int order;
-  double point, pair, translation, cell;
+  double point, pair, translation, cell, entry;
 };
 const CostRow kCost[] = {
-    {3, 224, 0.7052, 92.17, 0},    // [0.032]
-    {4, 286.4, 0.6828, 149.9, 232.8},    // [0.025]
-    {5, 380, 0.6811, 211.4, 7037},    // [0.022]
-    {6, 309.7, 0.7213, 303.1, 2.789e+04},    // [0.037]
-    {7, 584.6, 0.6548, 455.9, 4.707e+04},    // [0.037]
-    {8, 626, 0.6704, 635.1, 7.565e+04},    // [0.038]
-    {9, 600.8, 0.7151, 770.9, 1.84e+05},    // [0.044]
-    {10, 746, 0.6944, 993, 1.94e+05},    // [0.063]
-    {11, 659.5, 0.7511, 1459, 3.585e+05},    // [0.087]
-    {12, 345, 0.8486, 1752, 4.624e+05},    // [0.094]
-    {13, 0, 0.9459, 2013, 6.522e+05},    // [0.108]
-    {14, 0, 0.9564, 2880, 8.386e+05},    // [0.126]
+    {3, 324, 0.995, 46.79, 168.1, 484.7},    // [0.062]
+    {4, 403.6, 0.9608, 136.5, 0, 383.1},    // [0.050]
+    {5, 418.2, 0.9257, 187, 7598, 296.6},    // [0.074]
+    {6, 420.4, 0.9523, 335.6, 1.041e+04, 568.6},    // [0.048]
+    {7, 672.7, 0.9104, 521.7, 1.977e+04, 995.4},    // [0.039]
+    {8, 432.7, 0.9817, 483.4, 9.66e+04, 0},    // [0.066]
+    {9, 457.3, 0.9676, 176.8, 2.522e+05, 0},    // [0.083]
+    {10, 450.6, 1.037, 672.3, 2.545e+05, 0},    // [0.081]
+    {11, 370.5, 1.045, 716.8, 4.207e+05, 2667},    // [0.065]
+    {12, 218.5, 1.161, 1672, 5.694e+05, 584.6},    // [0.080]
+    {13, 131.7, 1.219, 1490, 8.413e+05, 0},    // [0.081]
+    {14, 0, 1.247, 1346, 9.57e+05, 3049},    // [0.084]
 };
+
+// Pair-cost weights of the counts beyond the fitted constants, measured 2026-11-23 (one thread,
+// AVX-512, uniform points, N = 1000-4000, open, order 6, depth 0 = one leaf against depth 1 =
+// 8 leaves, which is the same direct sum; targets = sources (mutual) or a shuffled copy
+// (one-sided)): per n^2/2 pairs, depth 0 1.80-1.94, depth 1 1.38-1.65, one-sided 1.81-2.01 times
+// 0.72 ns (the previous fit's pair constant). So a one-sided kernel evaluation costs 0.68 of a mutual pair of
+// distinct leaves, and a pair inside one leaf (the one-sided loop over all m^2 ordered pairs,
+// p2p_mutual.h) 1.36 of one.
+// kSelfExtra: a pair inside one leaf costs (1 + kSelfExtra) pairs of distinct leaves;
+// kOneSided: one one-sided kernel evaluation (M2P, P2L, direct W/X) in pairs.
+constexpr double kSelfExtra = 0.35;
+constexpr double kOneSided = 0.7;
+// choose_tree from the points keeps the uniform choice unless another tree is modelled cheaper
+// by more than this fraction
+constexpr double kChoiceMargin = 0.05;
 
 // ordered pairs (i, j) of [0, n) with |i - j| <= 1 (adjacent or equal cells along one axis)
 double adjacent_1d(double n)
@@ -100,6 +125,8 @@ TreeCounts uniform_tree_counts(std::size_t n, int depth, bool periodic)
   const double side = std::ldexp(1.0, depth), leaves = side * side * side, m = (double) n / leaves;
   const double adj = periodic ? 27 * leaves : std::pow(adjacent_1d(side), 3);
   t.near_pairs = adj * m * m / 2;
+  t.self_pairs = leaves * m * m / 2;
+  t.entries = (adj + leaves) / 2;
   for (int l = periodic ? 0 : 2; l <= depth; ++l) {
     const double s = std::ldexp(1.0, l), cells = s * s * s;
     t.cells += cells;
@@ -125,14 +152,97 @@ CostConstants cost_constants(int order)
   const CostRow *r = &kCost[0];
   for (const CostRow &c : kCost)
     if (c.order <= order) r = &c;
-  return CostConstants{1e-9 * r->point, 1e-9 * r->pair, 1e-9 * r->translation, 1e-9 * r->cell};
+  return CostConstants{1e-9 * r->point, 1e-9 * r->pair, 1e-9 * r->translation, 1e-9 * r->cell, 1e-9 * r->entry};
+}
+
+double one_sided_weight()
+{
+  return kOneSided;
+}
+
+double self_pair_extra()
+{
+  return kSelfExtra;
+}
+
+double modelled_cost(int order, std::size_t n, const TreeCounts &t)
+{
+  const CostConstants c = cost_constants(order);
+  return c.point * (double) n + c.pair * (t.near_pairs + kSelfExtra * t.self_pairs) + c.translation * t.translations +
+      c.cell * t.cells + c.entry * t.entries;
 }
 
 double modelled_cost(int order, std::size_t n, bool periodic, int depth)
 {
-  const CostConstants c = cost_constants(order);
-  const TreeCounts t = uniform_tree_counts(n, depth, periodic);
-  return c.point * (double) n + c.pair * t.near_pairs + c.translation * t.translations + c.cell * t.cells;
+  return modelled_cost(order, n, uniform_tree_counts(n, depth, periodic));
+}
+
+TreeCounts tree_counts(const Octree &tree, const InteractionLists &lists, const PeriodicImageLists *images, int order)
+{
+  const bool periodic = images != nullptr;
+  const int nsurf = surface_size(order);
+  const auto &cells = tree.cells;
+  TreeCounts t;
+  double one = 0;    // one-sided kernel evaluations
+  // small leaf: its W entries in a target leaf and X entries are one mutual pair (open plan)
+  auto small_leaf = [&](const Cell &A) { return A.leaf() && (int) A.gtrg <= nsurf && (int) A.gsrc <= nsurf; };
+  for (int b : tree.leaves) {
+    const Cell &B = cells[b];
+    const double nb = B.n_trg();
+    if (nb == 0) continue;
+    for (const int *a = lists.U.begin(b); a != lists.U.end(b); ++a) {
+      t.near_pairs += nb * cells[*a].n_src() / 2;
+      t.entries += 0.5;
+      if (*a == b) {
+        t.self_pairs += nb * nb / 2;
+        t.entries += 0.5;
+      }
+    }
+    if (periodic)
+      for (int e = images->U.begin(b); e < images->U.end(b); ++e) {
+        t.near_pairs += nb * cells[images->U.idx[e]].n_src() / 2;
+        t.entries += 0.5;
+      }
+    t.entries += lists.W.size(b) + (periodic ? images->W.size(b) : 0);
+    auto w_entry = [&](const Cell &A) {
+      if (!periodic && small_leaf(A)) t.near_pairs += nb * A.n_src();    // mutual, with its X dual
+      else one += nb * ((int) A.gsrc <= nsurf ? (double) A.n_src() : (double) nsurf);
+    };
+    for (const int *a = lists.W.begin(b); a != lists.W.end(b); ++a) w_entry(cells[*a]);
+    if (periodic)
+      for (int e = images->W.begin(b); e < images->W.end(b); ++e) w_entry(cells[images->W.idx[e]]);
+  }
+  // X entries (any target cell): direct for small target leaves (open: in the mutual pairs of
+  // the W entries above), else P2L onto the check surface
+  for (std::size_t b = 0; b < cells.size(); ++b) {
+    const Cell &B = cells[b];
+    if (B.n_trg() == 0) continue;
+    const bool direct = B.leaf() && (int) B.gtrg <= nsurf;
+    auto x_entry = [&](const Cell &A) {
+      if (direct) {
+        if (periodic || !small_leaf(B)) one += (double) B.n_trg() * A.n_src();
+      } else {
+        one += (double) nsurf * A.n_src();
+      }
+    };
+    t.entries += lists.X.size((int) b) + (periodic ? images->X.size((int) b) : 0);
+    for (const int *a = lists.X.begin((int) b); a != lists.X.end((int) b); ++a) x_entry(cells[*a]);
+    if (periodic)
+      for (int e = images->X.begin((int) b); e < images->X.end((int) b); ++e) x_entry(cells[images->X.idx[e]]);
+  }
+  t.near_pairs += kOneSided * one;
+  // translations and cells: levels with expansions (periodic 1, 2: distinct source cells)
+  for (int l = periodic ? 0 : 2; l <= tree.depth; ++l)
+    for (int c = tree.level_begin[l]; c < tree.level_begin[l + 1]; ++c) {
+      t.cells += 1;
+      if (periodic && l <= 2) {
+        std::set<int> distinct(lists.V.begin(c), lists.V.end(c));
+        t.translations += (double) distinct.size();
+      } else {
+        t.translations += lists.V.size(c);
+      }
+    }
+  return t;
 }
 
 TreeChoice choose_tree(int order, std::size_t n, bool periodic)
@@ -144,6 +254,95 @@ TreeChoice choose_tree(int order, std::size_t n, bool periodic)
     if (c < best.cost) best = TreeChoice{leaf_size_for_depth(n, d), d, c};
   }
   return best;
+}
+
+namespace {
+// The points and root box as the evaluator sees them (evaluate(), fmm_core.h): periodic
+// points wrapped into the cell; open: the bounding cube, rounded up to a power of two for
+// kernels whose operators depend on the box size (Yukawa).
+struct ChoicePoints {
+  const double *xyz = nullptr;
+  std::vector<double> wrapped;
+  RootBox root;
+  ChoicePoints(const KernelSpec &kernel, const Options &o, std::size_t n, const double *p)
+  {
+    xyz = p;
+    if (o.periodic) {
+      wrap_into_cell(n, p, o.root_center, o.root_half_width, wrapped);
+      xyz = wrapped.data();
+    }
+    if (o.fixed_root) {
+      for (int d = 0; d < 3; ++d) root.center[d] = o.root_center[d];
+      root.half_width = o.root_half_width;
+    } else {
+      root = bounding_cube(n, xyz, n, xyz);
+      if (kernel.type == KernelType::Yukawa) root.half_width = std::exp2(std::ceil(std::log2(root.half_width)));
+    }
+  }
+};
+
+TreeCounts counts_of_leaf(const ChoicePoints &pts, const Options &o, std::size_t n, int leaf, int *depth)
+{
+  Octree tree;
+  InteractionLists lists;
+  PeriodicImageLists images;
+  build_octree(tree, pts.root, n, pts.xyz, n, pts.xyz, leaf, o.max_depth);
+  if (o.periodic) build_periodic_interaction_lists(tree, lists, images);
+  else build_interaction_lists(tree, lists);
+  if (depth) *depth = tree.depth;
+  return tree_counts(tree, lists, o.periodic ? &images : nullptr, o.order);
+}
+
+TreeChoice model_leaf(const ChoicePoints &pts, const Options &o, std::size_t n, int leaf)
+{
+  int depth = 0;
+  const TreeCounts t = counts_of_leaf(pts, o, n, leaf, &depth);
+  return TreeChoice{leaf, depth, modelled_cost(o.order, n, t)};
+}
+}    // namespace
+
+TreeCounts actual_tree_counts(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz,
+                              int leaf_size, int *depth)
+{
+  const ChoicePoints pts(kernel, options, n, xyz);
+  return counts_of_leaf(pts, options, n, std::max(1, leaf_size), depth);
+}
+
+TreeChoice model_tree(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz,
+                      int leaf_size)
+{
+  if (n == 0) return TreeChoice{std::max(1, leaf_size), 0, 0.0};
+  const ChoicePoints pts(kernel, options, n, xyz);
+  return model_leaf(pts, options, n, std::max(1, leaf_size));
+}
+
+TreeChoice choose_tree(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz)
+{
+  const TreeChoice uniform = choose_tree(options.order, n, options.periodic);
+  if (n == 0) return uniform;
+  // candidates, largest first
+  std::set<int, std::greater<int>> leaves;
+  int dmax = 0;
+  while (dmax < 20 && std::ldexp(1.0, 3 * (dmax + 1)) <= (double) n) ++dmax;
+  const int dlast = std::min(dmax, uniform.depth + 1);
+  for (int d = 0; d <= dlast; ++d) {
+    leaves.insert(leaf_size_for_depth(n, d));
+    if (d < dlast)
+      leaves.insert((int) std::lround(std::sqrt((double) leaf_size_for_depth(n, d) * leaf_size_for_depth(n, d + 1))));
+  }
+  leaves.insert(default_leaf_size(options.order));
+  const ChoicePoints pts(kernel, options, n, xyz);
+  // the uniform choice unless another tree is modelled cheaper by more than kChoiceMargin (the
+  // fit's residuals are 4-8 %: without the margin, trees of near-equal modelled cost were
+  // picked that measured up to 1.12x slower, platelets 7e4 order 6)
+  const TreeChoice start = model_leaf(pts, options, n, uniform.leaf_size);
+  TreeChoice best{0, 0, 0.0};
+  for (int leaf : leaves) {
+    if (leaf == uniform.leaf_size) continue;
+    const TreeChoice c = model_leaf(pts, options, n, leaf);
+    if (best.leaf_size == 0 || c.cost < best.cost) best = c;
+  }
+  return best.leaf_size != 0 && best.cost < (1 - kChoiceMargin) * start.cost ? best : start;
 }
 
 }    // namespace kifmm

@@ -10,18 +10,38 @@
 //           per cell at levels >= 3, and the distinct source cells at levels 1, 2 (8 and 56
 //           per cell: there the kernels of one source cell are summed over its image slots)
 //   cells = cells with expansions (upward/downward passes, FFTs): levels >= 2 open, >= 0 periodic
-// cost = point * n + pair * near + translation * trans + cell * cells, with per-order constants
-// (seconds) fitted by `bench/calibrate --cost` to measured evaluations (calibration.cpp). The
-// tree choice of kspace_style kifmm is the depth of least modelled cost (choose_tree, kifmm.h),
-// realised by the leaf size leaf_size_for_depth(n, d).
+//   self  = the part of near made of pairs inside one leaf (m^2 / 2 per leaf)
+//   entries = unordered pairs of adjacent leaves (each leaf with itself included) and W, X list
+//           entries: the per-pair overhead of the near field (one task per leaf pair) and lists
+// cost = point * n + pair * (near + self_extra * self) + translation * trans + cell * cells
+//        + entry * entries,
+// with per-order constants (seconds) fitted by `bench/calibrate --cost` to measured evaluations
+// (calibration.cpp). self_extra: a leaf with itself runs the one-sided loop over all m^2
+// ordered pairs (p2p_mutual.h, AVX-512), not m^2 / 2 mutual ones; it decides depth 0 against
+// depth 1 for small N (open: both are the same direct sum, measured 1.25-1.44x slower at depth
+// 0 for 1e3 atoms in the bench/solvers campaign). The uniform tree choice (choose_tree(order, n,
+// periodic)) is the depth of least modelled cost, realised by the leaf size
+// leaf_size_for_depth(n, d).
+//
+// Actual trees (tree_counts): the same counts taken from the interaction lists of a tree built
+// over the real points (adaptive: W and X lists too), so that the choice for clustered points
+// (choose_tree(kernel, options, n, xyz), kifmm.h) compares the trees the points really give.
 #pragma once
+
+#include "kifmm.h"
 
 #include <cstddef>
 
 namespace kifmm {
 
+struct Octree;
+struct InteractionLists;
+struct PeriodicImageLists;
+
 struct TreeCounts {
   double near_pairs = 0, translations = 0, cells = 0;
+  double self_pairs = 0;    // part of near_pairs: pairs inside one leaf
+  double entries = 0;       // near-field leaf pairs (a leaf with itself included) + W + X entries
 };
 
 // Counts of a full tree of the given depth over n uniform points (see above).
@@ -37,11 +57,31 @@ TreeCounts uniform_tree_counts(std::size_t n, int depth, bool periodic);
 int leaf_size_for_depth(std::size_t n, int depth);
 
 struct CostConstants {
-  double point = 0, pair = 0, translation = 0, cell = 0;    // seconds each
+  double point = 0, pair = 0, translation = 0, cell = 0, entry = 0;    // seconds each
 };
 CostConstants cost_constants(int order);
 
 // Modelled CPU seconds of one evaluation with the full tree of depth d.
 double modelled_cost(int order, std::size_t n, bool periodic, int depth);
+
+// Modelled CPU seconds of one evaluation of n points with these counts.
+double modelled_cost(int order, std::size_t n, const TreeCounts &counts);
+
+// Counts of an actual tree over points that are both sources and targets (N-body), from its
+// interaction lists (images: the periodic image lists, nullptr with open boundaries), at order
+// p (surface points nsurf = surface_size(p) decide direct versus expansion work like the
+// evaluator: fmm_core.h). On a full tree over uniform points they equal uniform_tree_counts up
+// to the random leaf occupancies (unittest/engine/test_tree_choice.cpp). Adaptive trees add
+// the W and X lists: one-sided kernel evaluations (M2P, P2L, direct W/X entries; the open
+// mutual plan evaluates small-leaf W/X entries once for both sides, counted as pairs) are
+// counted as pairs with the weight one_sided_weight().
+TreeCounts tree_counts(const Octree &tree, const InteractionLists &lists, const PeriodicImageLists *images, int order);
+double one_sided_weight();
+double self_pair_extra();
+
+// Counts of the actual tree that an N-body evaluation with these options and leaf size builds
+// over these points (root, periodic wrapping as in evaluate()); depth: of that tree.
+TreeCounts actual_tree_counts(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz,
+                              int leaf_size, int *depth = nullptr);
 
 }    // namespace kifmm

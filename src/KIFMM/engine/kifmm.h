@@ -121,14 +121,14 @@ TreeChoice choose_tree(int order, std::size_t n, bool periodic);
 
 // Tree for these n points (N-body: sources = targets = xyz, the evaluator's options: order,
 // periodic, root, max_depth; options.leaf_size is ignored): builds the octree and interaction
-// lists of the actual points for a few candidate leaf sizes (the leaf sizes of the uniform
-// depths 0 .. d+1 around the uniform choice d, the geometric means between neighbouring ones,
-// and the per-order default leaf size), evaluates the same cost model on the counts of each
-// actual tree (tree_counts, cost_model.h) and returns the cheapest; the uniform choice is kept
-// unless another tree is modelled more than 5 % cheaper (the fit's residuals are 4-8 %).
-// depth: of the actual tree. Deterministic for the same points; one process's points only,
-// so the distributed evaluation (each rank holds its own atoms) keeps the uniform choice
-// above. Costs a few tree builds (less than one evaluation; bench_engine --tree-choice).
+// lists of the actual points for a few candidate leaf sizes, none below the uniform choice's
+// (the leaf sizes of the uniform depths 0 .. d of the uniform choice d, the geometric means
+// between neighbouring ones, and the per-order default leaf size), evaluates the same cost
+// model on the counts of each actual tree (tree_counts, cost_model.h) and returns the cheapest;
+// the uniform choice is kept unless another tree is modelled more than 5 % cheaper (the fit's
+// residuals are 4-8 %). depth: of the actual tree. Deterministic for the same points; one
+// process's points only, so the distributed evaluation (each rank holds its own atoms) keeps
+// the uniform choice above. Costs a few tree builds (bench_engine --tree-choice: "choice s").
 TreeChoice choose_tree(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz);
 
 // Modelled cost and depth of the actual tree of these points with this leaf size (as above).

@@ -168,13 +168,7 @@ int tree_choice(int argc, char **argv)
     else if (!std::strcmp(argv[i], "--periodic")) periodic = true;
   }
   omp_set_num_threads(1);
-  struct Cfg {
-    std::string name;
-    bench::Points pts;
-  };
-  std::vector<Cfg> cfgs;
-  for (double n : sizes) cfgs.push_back({"uniform", bench::uniform((std::size_t) n, 1)});
-  for (double n : plum) cfgs.push_back({"plummer", bench::plummer((std::size_t) n, 2)});
+  std::vector<bench::NamedPoints> cfgs = bench::uniform_and_plummer(sizes, plum);
   for (const std::string &f : files) {
     std::string name = std::filesystem::path(f).stem().string();
     cfgs.push_back({name, read_charge_data(f)});
@@ -183,7 +177,7 @@ int tree_choice(int argc, char **argv)
   std::printf("| points | N | p | leaf old / uniform / points | depth old / uniform / points | CPU s per evaluation old / uniform / points (medians) | points/old | points/uniform | uniform/old | force error old / uniform / points | choice s |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
   std::fflush(stdout);
-  for (Cfg &cfg : cfgs) {
+  for (bench::NamedPoints &cfg : cfgs) {
     const std::size_t n = cfg.pts.size();
     Options base;
     base.max_depth = 20;
@@ -260,14 +254,7 @@ int tree_choice(int argc, char **argv)
         ev[v] = std::make_unique<FmmEvaluator<LaplaceKernel>>(LaplaceKernel{}, KernelSpec{}, o);
         ev[v]->evaluate(n, x, q, n, x, pot.data(), grad.data());    // operators, error
         depth[v] = ev[v]->stats().depth;
-        double num = 0, den = 0;
-        for (std::size_t i = 0; i < ns; ++i)
-          for (int d = 0; d < 3; ++d) {
-            const double a = grad[3 * sample[i] + d], b = ref[3 * i + d];
-            num += (a - b) * (a - b);
-            den += b * b;
-          }
-        err[v] = std::sqrt(num / den);
+        err[v] = bench::sampled_relative_rms(grad, sample, ref);
       }
       // evaluations per timing: >= min_time s (from one timed evaluation of the old tree)
       c0 = cpu_now();
@@ -330,13 +317,7 @@ int main(int argc, char **argv)
       plum = {};
     }
   }
-  struct Cfg {
-    std::string name;
-    bench::Points pts;
-  };
-  std::vector<Cfg> cfgs;
-  for (double n : sizes) cfgs.push_back({"uniform", bench::uniform((std::size_t) n, 1)});
-  for (double n : plum) cfgs.push_back({"plummer", bench::plummer((std::size_t) n, 2)});
+  std::vector<bench::NamedPoints> cfgs = bench::uniform_and_plummer(sizes, plum);
 
   const std::string cache_dir = (std::filesystem::temp_directory_path() / ("kifmm_bench_" + std::to_string(::getpid()))).string();
   std::filesystem::create_directories(cache_dir);

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <random>
+#include <string>
 #include <vector>
 
 namespace bench {
@@ -59,6 +60,38 @@ inline Points plummer_box(std::size_t n, unsigned seed, double a)
     p.q.push_back(p.size() % 2 ? -1.0 : 1.0);
   }
   return p;
+}
+
+// Named point sets: uniform points (seed 1) of each size, then Plummer spheres (seed 2) of each
+// size, as the engine benchmarks sweep them
+struct NamedPoints {
+  std::string name;
+  Points pts;
+};
+
+inline std::vector<NamedPoints> uniform_and_plummer(const std::vector<double> &sizes,
+                                                    const std::vector<double> &plummer_sizes)
+{
+  std::vector<NamedPoints> sets;
+  for (double n : sizes) sets.push_back({"uniform", uniform((std::size_t) n, 1)});
+  for (double n : plummer_sizes) sets.push_back({"plummer", plummer((std::size_t) n, 2)});
+  return sets;
+}
+
+// Relative RMS error of grad (3 per target, all targets) at the targets sample[i] against
+// ref (3 per sampled target, in the order of sample)
+inline double sampled_relative_rms(const std::vector<double> &grad,
+                                   const std::vector<std::size_t> &sample,
+                                   const std::vector<double> &ref)
+{
+  double num = 0, den = 0;
+  for (std::size_t i = 0; i < sample.size(); ++i)
+    for (int d = 0; d < 3; ++d) {
+      const double a = grad[3 * sample[i] + d], b = ref[3 * i + d];
+      num += (a - b) * (a - b);
+      den += b * b;
+    }
+  return std::sqrt(num / den);
 }
 
 }    // namespace bench

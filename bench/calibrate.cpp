@@ -286,14 +286,7 @@ int main(int argc, char **argv)
         ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), gr.data());
         t = std::min(t, double(std::clock() - c0) / CLOCKS_PER_SEC);
       }
-      double num = 0, den = 0;
-      for (std::size_t i = 0; i < ns; ++i)
-        for (int d = 0; d < 3; ++d) {
-          const double a = gr[3 * sample[i] + d], b = rg[3 * i + d];
-          num += (a - b) * (a - b);
-          den += b * b;
-        }
-      const double err = std::sqrt(num / den);
+      const double err = bench::sampled_relative_rms(gr, sample, rg);
       std::fprintf(stderr, "order %d leaf %d: %.3f s, error %.2e\n", order, leaf, t, err);
       if (t < best_t) {
         best_t = t;

@@ -271,13 +271,8 @@ struct ChoicePoints {
       wrap_into_cell(n, p, o.root_center, o.root_half_width, wrapped);
       xyz = wrapped.data();
     }
-    if (o.fixed_root) {
-      for (int d = 0; d < 3; ++d) root.center[d] = o.root_center[d];
-      root.half_width = o.root_half_width;
-    } else {
-      root = bounding_cube(n, xyz, n, xyz);
-      if (kernel.type == KernelType::Yukawa) root.half_width = std::exp2(std::ceil(std::log2(root.half_width)));
-    }
+    root = evaluation_root(o.fixed_root, o.root_center, o.root_half_width,
+                           kernel.type == KernelType::Yukawa, n, xyz, n, xyz);
   }
 };
 

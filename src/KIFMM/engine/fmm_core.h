@@ -663,17 +663,8 @@ void FmmEvaluator<K>::evaluate(std::size_t n_src, const double *src_xyz, const d
   if (ns == 0) return;
   const bool same_arrays = src_xyz == trg_xyz;
   if (opt_.periodic) periodic_wrap(ns, sxyz, n_trg, trg_xyz);
-  RootBox root;
-  if (opt_.fixed_root) {
-    for (int d = 0; d < 3; ++d) root.center[d] = opt_.root_center[d];
-    root.half_width = opt_.root_half_width;
-  } else {
-    root = bounding_cube(ns, sxyz, n_trg, trg_xyz);
-    // Kernels whose operators depend on the box size (Yukawa: kappa * h): round the root
-    // half-width up to a power of two, so that boxes of every level come from a fixed
-    // ladder of sizes and operator sets are reused when the points move between calls.
-    if (!level_independent_operators<K>()) root.half_width = std::exp2(std::ceil(std::log2(root.half_width)));
-  }
+  const RootBox root = evaluation_root(opt_.fixed_root, opt_.root_center, opt_.root_half_width,
+                                       !level_independent_operators<K>(), ns, sxyz, n_trg, trg_xyz);
   build_octree(tree_, root, ns, sxyz, n_trg, trg_xyz, opt_.leaf_size, opt_.max_depth);
   sorted_copies(ns, sxyz, sq, n_trg, trg_xyz);
   double t1 = omp_get_wtime();

@@ -57,6 +57,21 @@ RootBox bounding_cube_of(const double lo[3], const double hi[3])
   return box;
 }
 
+RootBox evaluation_root(bool fixed, const double fixed_center[3], double fixed_half_width,
+                        bool size_dependent_operators, std::size_t n_src, const double *src_xyz,
+                        std::size_t n_trg, const double *trg_xyz)
+{
+  RootBox root;
+  if (fixed) {
+    for (int d = 0; d < 3; ++d) root.center[d] = fixed_center[d];
+    root.half_width = fixed_half_width;
+    return root;
+  }
+  root = bounding_cube(n_src, src_xyz, n_trg, trg_xyz);
+  if (size_dependent_operators) root.half_width = std::exp2(std::ceil(std::log2(root.half_width)));
+  return root;
+}
+
 void morton_keys(const RootBox &root, std::size_t n, const double *xyz, std::vector<uint64_t> &keys)
 {
   keys.resize(n);

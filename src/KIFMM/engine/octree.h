@@ -73,6 +73,15 @@ RootBox bounding_cube(std::size_t n_src, const double *src_xyz, std::size_t n_tr
 // Bounding cube from the coordinate bounds (lo/hi over all points; same result as above).
 RootBox bounding_cube_of(const double lo[3], const double hi[3]);
 
+// Root box of one evaluation: the given box when fixed (fixed_center, fixed_half_width: the
+// periodic cell or a user root), else the bounding cube of the points, its half-width rounded
+// up to a power of two when the kernel's operators depend on the box size (Yukawa: kappa h),
+// so that the boxes of every level come from a fixed ladder of sizes and operator sets are
+// reused when the points move between calls. Used by the evaluator and by the tree choice.
+RootBox evaluation_root(bool fixed, const double fixed_center[3], double fixed_half_width,
+                        bool size_dependent_operators, std::size_t n_src, const double *src_xyz,
+                        std::size_t n_trg, const double *trg_xyz);
+
 // Build the tree. Points outside a given root box are clamped into its boundary cells.
 // With `top` (distributed): the top tree is copied (all its cells, empty here or not, their
 // split decisions and counts; tree.top_index maps cells to top cells, -1 below the top); an

@@ -28,22 +28,16 @@ LABELS = {"kifmm": "kifmm", "msm": "msm (pair coul/msm + kspace msm)",
 
 # archived kifmm runs of earlier engines (results/kifmm-COMMIT.jsonl), newest first
 ARCHIVES = {
+    "kifmm-c4d85d4.jsonl": "the kifmm runs and setup table of the third CPU-time pass (engine "
+    "at c4d85d4: leaf size from the tree depth of least modelled cost for N uniform atoms, "
+    "choose_tree(order, n, periodic), before the choice from the actual atom positions and "
+    "the refitted cost model of commits 0a8321b/62e9c4c)",
     "kifmm-923c304.jsonl": "the kifmm runs and setup table of the second CPU-time pass (engine "
     "at 923c304: mutual near field, leaf size from the per-order calibration table, before the "
     "tree depth chosen per N and boundary by the cost model, commits 0ca0f18/1e8e477)",
     "kifmm-cbcfc98.jsonl": "the kifmm runs and setup table of the first CPU-time campaign "
     "(engine at cbcfc98, before the mutual near field and later engine speedups; runs "
     "labelled 2b87538+dirty: same src/ plus the timer)",
-}
-
-# what the comparison with each archive shows (checked against the tables when regenerated)
-ENGINE_CHANGE_NOTES = {
-    "kifmm-923c304.jsonl": " the archived runs were measured in the session of the stored "
-    "competitor runs (their re-measurement at 923c304 gave 0.98-1.11 of the stored times), "
-    "in which CPU times were about 1.2x shorter than in the session of this report's kifmm "
-    "runs (competitor settings re-measured at c4d85d4), so at the same tree depth the engine "
-    "is not slower; the deeper trees that the cost model chooses for clustered atoms and the "
-    "single leaf at N ~ 1e3 cost more than that factor.",
 }
 
 SKIPPED_WALL = []    # (case, n, spec) of runs without CPU times (left out: see load)
@@ -353,7 +347,7 @@ def make_plots(recs, outdir, cases, profile):
                 ax.plot(xs[-1:] + xe, ys[-1:] + ye, ":", marker="d", mfc="none",
                         color=COLORS["direct"], ms=4, label="direct (N^2 extrapolated)")
             # O(N) guide through kifmm's first point at 1e-5 with N >= 5000 (below, kifmm's
-            # octree is a single leaf: a direct sum)
+            # octree has at most a level or two, mostly near field)
             t0 = [(natoms[n], time_at(ok_runs(recs, case, n, "kifmm"), 1e-5)[0]) for n in ns
                   if n in natoms and natoms[n] >= 5000]
             t0 = [p for p in t0 if p[1] is not None]
@@ -412,7 +406,66 @@ def make_plots(recs, outdir, cases, profile):
 
 # ----------------------------------------------------------------------------- tables
 
-def settings_table(recs):
+def ref_history_note(recs, results_path):
+    """Whether the current references (remade in a fresh work directory) are the same atoms
+    as the earlier references of the same case and N in the results file (same atom count,
+    sample and RMS force), and whether the re-measured stored runs gave the same errors."""
+    if not results_path or not os.path.exists(results_path):
+        return ""
+    hist = {}
+    with open(results_path) as f:
+        for line in f:
+            try:
+                r = json.loads(line)
+            except json.JSONDecodeError:
+                continue
+            if r.get("kind") == "reference":
+                hist.setdefault((r["case"], r["n"]), []).append(r)
+    same, diff, earlier = 0, [], set()
+    for key, v in hist.items():
+        cur = v[-1]
+        prev = [r for r in v[:-1] if r.get("commit") != cur.get("commit")]
+        if not prev:
+            continue
+        earlier.add(str(prev[-1].get("commit")))
+        ok = (prev[-1].get("sampled") == cur.get("sampled") and same_atoms(prev[-1], cur))
+        if ok:
+            same += 1
+        else:
+            diff.append(f"{key[0]} {key[1]}")
+    txt = ""
+    if same or diff:
+        txt = (f"Remade in a fresh work directory for the kifmm runs: {same} of {same + len(diff)}"
+               f" references are the same atoms as the earlier references of the same case and "
+               f"N (of {', '.join(sorted(earlier))}; same atom count, sample and RMS force)" +
+               (f", the others ({', '.join(diff)}) are remade scene snapshots, see [Hard "
+                "cases](#hard-cases)" if diff else "") + ".")
+    kc = kifmm_commit(recs)
+    stored = {(r["case"], r["n"], r["spec"]): r for r in ok_runs(recs)}
+    n_same, n_all, dev = 0, 0, []
+    for r in side_records(results_path, r"recheck-.*\.jsonl"):
+        old = stored.get((r.get("case"), r.get("n"), r.get("spec")))
+        if r.get("commit") != kc or r.get("status") != "ok" or old is None:
+            continue
+        if r.get("solver") == "kifmm":
+            continue
+        n_all += 1
+        exact = (r.get("solver") in EXACT and
+                 max(r.get("error") or 0, old.get("error") or 0) < 1e-12)
+        if r.get("error") == old.get("error") or exact:
+            n_same += 1
+        else:
+            dev.append(f"{r['case']} {r['n']} {r['spec']}: {fmt_e(r.get('error'))} "
+                       f"(stored {fmt_e(old.get('error'))})")
+    if n_all:
+        txt += (f" Of the {n_all} stored competitor settings re-measured on these references "
+                f"in the kifmm runs' session, {n_same} gave the stored error to all digits (the "
+                f"exact sums: to round-off, below 1e-12)" +
+                (": " + "; ".join(dev) if dev else "") + ".")
+    return txt
+
+
+def settings_table(recs, results_path=None):
     runs = [r for r in recs if r.get("kind") == "run" and r.get("status") != "skipped"]
     if not runs:
         return "(no results)\n"
@@ -435,7 +488,7 @@ def settings_table(recs):
     nfail = sum(1 for r in runs if r.get("kind") == "run" and r.get("status") != "ok")
     lines = ["| setting | value |", "|---|---|",
              f"| kifmm runs: source commit, measured | {commits(kif)} (engine and styles of "
-             f"that commit, built from a clean export of it), {dates(kif)} |",
+             f"that commit, built from a clean checkout of it), {dates(kif)} |",
              f"| kifmm operator setup table: source commit | {commits(setup)} |",
              f"| competitor runs (msm, ewald, pppm, direct, coulcut): source commit, measured | "
              f"{commits(comp)}, {dates(comp)}. Their code (LAMMPS's styles, kifmm::direct_sum, "
@@ -443,13 +496,8 @@ def settings_table(recs):
              "at these commits; `+dirty`: another engineer's uncommitted timer in the "
              "engine's fmm_core.h, which only kifmm runs use |",
              f"| source commit of the references (same data files and reference forces for "
-             f"every solver) | {commits(refs)}. Remade in a fresh work directory for the kifmm "
-             "runs: the same atoms as the earlier references of 2a60b3d, b207cd2 and "
-             "2b87538+dirty on which the stored competitor runs were measured (same atom "
-             "count, sample and RMS force; the re-measured competitor settings give the same "
-             "errors to all digits; reference forces equal to round-off: the direct sum's "
-             "error is 0 against 1e-16 - 3e-16 before), except the scene snapshots noted under "
-             "[Hard cases](#hard-cases) |",
+             f"every solver) | {commits(refs)}. " + ref_history_note(recs, results_path) +
+             " |",
              "| earlier kifmm runs | " + "; ".join(
                  f"bench/solvers/results/{fn}: {why}" for fn, why in ARCHIVES.items()) +
              "; **not used in this report** except in the tables [kifmm on the current "
@@ -522,9 +570,9 @@ def median(v):
     return v[len(v) // 2] if len(v) % 2 else 0.5 * (v[len(v) // 2 - 1] + v[len(v) // 2])
 
 
-def recheck_summary(recs, results_path):
-    """One sentence per session of re-measurements: median and range of re-measured / stored
-    CPU time of the competitors' settings and of kifmm's."""
+def recheck_groups(recs, results_path):
+    """(day, commit) -> {"competitors": [...], "kifmm": [...]}: re-measured / stored CPU time
+    per evaluation of the recheck records (kifmm: only those of the stored kifmm runs' engine)."""
     stored = {(r["case"], r["n"], r["spec"]): r for r in ok_runs(recs)}
     by = {}
     for r in side_records(results_path, r"recheck-.*\.jsonl"):
@@ -536,8 +584,15 @@ def recheck_summary(recs, results_path):
             continue
         by.setdefault((r.get("date", "?")[:10], r.get("commit")), {}).setdefault(
             "kifmm" if kif else "competitors", []).append(r["c_eval"] / old["t_eval"])
+    return by
+
+
+def recheck_summary(recs, results_path):
+    """One sentence per session of re-measurements: median and range of re-measured / stored
+    CPU time of the competitors' settings and of kifmm's."""
     out = []
-    for (day, commit), groups in sorted(by.items(), key=lambda x: str(x[0])):
+    for (day, commit), groups in sorted(recheck_groups(recs, results_path).items(),
+                                        key=lambda x: str(x[0])):
         parts = []
         for g in ("competitors", "kifmm"):
             v = sorted(groups.get(g, []))
@@ -547,6 +602,38 @@ def recheck_summary(recs, results_path):
         out.append(f"Re-measured with the binary of {commit} ({day}), new / stored CPU time per "
                    "evaluation, median (min - max): " + ", ".join(parts) + ".")
     return " ".join(out)
+
+
+def session_factor(recs, results_path, commit, group="competitors"):
+    """(median, min, max, count) of re-measured / stored CPU time of the recheck records made
+    with the binary of `commit` (the session of that commit's kifmm runs), or None."""
+    v = sorted(x for (_, c), g in recheck_groups(recs, results_path).items() if c == commit
+               for x in g.get(group, []))
+    return (median(v), v[0], v[-1], len(v)) if v else None
+
+
+def kifmm_commit(recs):
+    """The source commit of most of the ok kifmm runs (the engine of this report)."""
+    count = {}
+    for r in ok_runs(recs, solver="kifmm"):
+        count[r.get("commit")] = count.get(r.get("commit"), 0) + 1
+    return max(count, key=count.get) if count else None
+
+
+def archive_session_note(recs, results_path, archive):
+    """How CPU times of the archived runs' session compare with this report's kifmm session:
+    the stored competitor settings re-measured in each (recheck-COMMIT.jsonl)."""
+    commit = archive[len("kifmm-"):-len(".jsonl")]
+    fa = session_factor(recs, results_path, commit)
+    fn = session_factor(recs, results_path, kifmm_commit(recs))
+    if not fa or not fn:
+        return ""
+    return (f" Stored competitor settings re-measured at the end of the archived runs' session "
+            f"(results/recheck-{commit}.jsonl) took a median {fa[0]:.2f}x their stored CPU "
+            f"time ({fa[3]} settings), in the session of this report's kifmm runs "
+            f"{fn[0]:.2f}x ({fn[3]} settings): the same work took about {fn[0] / fa[0]:.2f}x "
+            "as much CPU time in this report's session, so a ratio new / old near that value "
+            "means an unchanged speed of the engine.")
 
 
 def ratio_table(recs, cases):
@@ -721,7 +808,8 @@ def scaling_table(recs, cases):
                 runs = ok_runs(recs, case, n)
                 if t is not None and runs:
                     pts.append((runs[0]["natoms"], t))
-            # at N ~ 1e3 kifmm's tree is a single leaf (a direct sum): fit from N >= 5000
+            # at N ~ 1e3 kifmm's tree is one or two levels, mostly near field: fit from
+            # N >= 5000
             pts = [p for p in pts if p[0] >= 5000]
             if len(pts) < 2:
                 continue
@@ -780,32 +868,38 @@ def same_atoms(a, b):
 
 def depth_change_summary(recs, results_path, archive):
     """One paragraph: the CPU time ratios new / archived grouped by how the tree depth changed
-    (same depth at N >= 5e4; deeper; shallower; depth 0 now at N ~ 1e3)."""
+    (a single leaf now or before; else same, deeper or shallower tree, at N >= 5e4 and below)."""
     old = archived_runs(results_path, archive)
-    groups = {"same": [], "deeper": [], "shallower": [], "zero": []}
+    groups = {}
     for r in ok_runs(recs, solver="kifmm"):
         o = old.get((r["case"], r["n"], r["spec"]))
         if o is None or not same_atoms(r, o) or o.get("depth") is None or r.get("depth") is None:
             continue
         q = r["t_eval"] / o["c_eval"]
+        big = "big" if r["natoms"] >= 50000 else "small"
         if r["depth"] == 0 and o["depth"] > 0:
-            groups["zero"].append(q)
-        elif r["natoms"] < 50000:
-            continue
+            g = "zero"
+        elif o["depth"] == 0 and r["depth"] > 0:
+            g = "from_zero"
         elif r["depth"] == o["depth"]:
-            groups["same"].append(q)
+            g = "same_" + big
         else:
-            groups["deeper" if r["depth"] > o["depth"] else "shallower"].append(q)
+            g = ("deeper_" if r["depth"] > o["depth"] else "shallower_") + big
+        groups.setdefault(g, []).append(q)
 
     def st(v):
         v = sorted(v)
         med = median(v)
         return f"{len(v)} settings, median {med:.2f} ({v[0]:.2f} - {v[-1]:.2f})"
-    words = {"same": "N >= 5e4 with the same tree depth as before",
-             "deeper": "N >= 5e4 where the cost model chose a deeper tree",
-             "shallower": "N >= 5e4 where it chose a shallower tree",
-             "zero": "a single leaf (depth 0) where the tree had depth >= 1"}
-    parts = [f"{words[g]}: {st(v)}" for g, v in groups.items() if v]
+    words = {"same_big": "N >= 5e4 with the same tree depth as before",
+             "deeper_big": "N >= 5e4 with a deeper tree",
+             "shallower_big": "N >= 5e4 with a shallower tree",
+             "same_small": "N < 5e4 with the same tree depth",
+             "deeper_small": "N < 5e4 with a deeper tree (not a single leaf before)",
+             "shallower_small": "N < 5e4 with a shallower tree (not a single leaf now)",
+             "zero": "a single leaf (depth 0) where the tree had depth >= 1",
+             "from_zero": "a tree of depth >= 1 where it was a single leaf (depth 0)"}
+    parts = [f"{words[g]}: {st(groups[g])}" for g in words if g in groups]
     return ("CPU eval new / old by tree depth (`depth` in the records): " + "; ".join(parts) +
             ".") if parts else ""
 
@@ -1104,6 +1198,202 @@ def pending_list(cfg_path, profile):
             if not c.get("enabled", True)]
 
 
+def high_order_note(recs):
+    """The tree depths of the P >= 12 runs with open boundaries (depth <= 1: all near field,
+    a direct sum, error at round-off), and where their far field is tested."""
+    byd = {}
+    for case in cases_of(recs):
+        for n in ns_of(recs, case):
+            rs = [r for r in ok_runs(recs, case, n, "kifmm") if (r.get("order") or 0) >= 12
+                  and not r.get("periodic") and r.get("depth") is not None]
+            if rs:
+                d = min(r["depth"] for r in rs)
+                byd.setdefault(min(d, 2), []).append(f"{case} {nlabel(n, rs[0]['natoms'])}")
+    if not byd:
+        return ""
+    words = {0: "a single leaf (depth 0)", 1: "depth 1 (8 adjacent leaves, no far field)",
+             2: "depth >= 2 (far field)"}
+    return ("With open boundaries the trees chosen for these orders have " +
+            "; ".join(f"{words[d]} on {', '.join(v)}" for d, v in sorted(byd.items())) +
+            ". Depth 0 or 1 is a direct sum (error at round-off), so the far field of these "
+            "orders is tested at the larger N, the rows of the order table below.")
+
+
+def scene_snapshot_note(recs, results_path):
+    """The trees of kifmm on the 1000-atom charges-box, and which snapshots were made again
+    (results/scene-snapshots-COMMIT.jsonl: the earlier snapshots' reference and competitor
+    runs, kept apart)."""
+    txt = ""
+    cb = [r for r in ok_runs(recs, "scene_charges-box", solver="kifmm") if r.get("depth")
+          is not None]
+    if cb:
+        ds = sorted({r["depth"] for r in cb})
+        txt += (f"charges-box has {cb[0]['natoms']} atoms in the quick variant: kifmm's octree "
+                "has depth " + "/".join(str(d) for d in ds) + " there (depth 0 or 1 with "
+                "open boundaries: all near field, a direct sum). ")
+    refs = {(r["case"], r["n"]): r for r in recs if r.get("kind") == "reference"}
+    d = os.path.dirname(os.path.abspath(results_path))
+    try:
+        files = sorted(f for f in os.listdir(d) if re.fullmatch(r"scene-snapshots-.*\.jsonl", f))
+    except OSError:
+        files = []
+    newest = {f: max((r.get("date", "") for r in side_records(results_path, re.escape(f))),
+                     default="") for f in files}
+    def rerun_note(keys):
+        miss = [f"{c} {n}" for c, n in keys
+                if not any(r.get("kind") == "run" and r.get("case") == c and r.get("n") == n
+                           and r.get("solver") != "kifmm" for r in recs)]
+        if not miss:
+            return ", and every solver was run again on the new ones"
+        return (", and on the new ones kifmm was run but not yet the competitors: " +
+                ", ".join(miss) + " (see [Pending](#pending))")
+    for fn in sorted(files, key=lambda f: newest[f], reverse=True):
+        old = [r for r in side_records(results_path, re.escape(fn))
+               if r.get("kind") == "reference"]
+        diff, same = [], []
+        for o in old:
+            r = refs.get((o["case"], o["n"]))
+            if r is None:
+                continue
+            if same_atoms(r, o):
+                same.append(o)
+            else:
+                rel = (abs(r["f_rms"] - o["f_rms"]) / abs(o["f_rms"])
+                       if r.get("natoms") == o.get("natoms") and o.get("f_rms") else None)
+                diff.append((o, rel))
+        rels = sorted(x for _, x in diff if x is not None)
+        commit = fn[len("scene-snapshots-"):-len(".jsonl")]
+        txt += (f"The snapshots of results/{fn} (commit {commit}) were replaced by snapshots "
+                f"made again from the examples: " +
+                ", ".join(f"{o['case']} {o['n']}" + ("" if x is not None else
+                                                      f" ({o['natoms']} atoms, now "
+                                                      f"{refs[(o['case'], o['n'])]['natoms']})")
+                          for o, x in diff) +
+                (f" (relative change of the RMS reference force {rels[0]:.1e} - "
+                 f"{rels[-1]:.1e})" if rels else "") +
+                " are other atoms; the competitors' runs on the earlier snapshots are kept "
+                "apart in that file" + rerun_note([(o["case"], o["n"]) for o, _ in diff]) +
+                ". ")
+    if files:
+        txt += ("The end states change whenever the engine changes (the scenes run with kifmm, "
+                "whose forces differ within the requested accuracy from one tree to another). "
+                "The archived competitor runs are not used in this report. ")
+    sc = sorted({str(r.get("commit")) for (c, _), r in refs.items() if c.startswith("scene_")})
+    if sc:
+        txt += ("The current snapshots and their references were made at commit " +
+                ", ".join(sc) + ".")
+    return txt
+
+
+def session_paragraph(recs, results_path):
+    """The summary's paragraph on the sessions: when the kifmm runs, the references and the
+    competitor runs were measured, and the CPU-time factor between the sessions."""
+    kc = kifmm_commit(recs)
+    fn = session_factor(recs, results_path, kc)
+    fk = session_factor(recs, results_path, kc, "kifmm")
+    refs = [r for r in recs if r.get("kind") == "reference"]
+    comp = [r for r in ok_runs(recs) if r["solver"] != "kifmm"]
+    same = sorted({r["case"] for r in comp if r.get("commit") == kc})
+    others = sorted({str(r.get("commit")) for r in comp if r.get("commit") != kc})
+    if not others:
+        return (f"All runs of these results are from one campaign (commit {kc}): the ratios "
+                "compare CPU times measured in one session.\n")
+    subj = [f"The kifmm runs (engine at {kc})"]
+    if refs and all(r.get("commit") == kc for r in refs):
+        subj.append("the exact references")
+    if same:
+        subj.append("the competitors' runs on " + ", ".join(same))
+    txt = (", ".join(subj[:-1]) + " and " + subj[-1] if len(subj) > 1 else subj[0]) + (
+        " are from a later session of the machine than the other competitor runs (commits "
+        + ", ".join(others) + "). ")
+    if fn:
+        txt += (f"Re-measured in that session, the stored competitors' settings took a median "
+                f"{fn[0]:.2f}x their stored CPU time ({fn[1]:.2f} - {fn[2]:.2f}, {fn[3]} "
+                "settings)" + (f", kifmm's own runs {fk[0]:.2f}x ({fk[1]:.2f} - {fk[2]:.2f})"
+                               if fk else "") +
+                " (table under [Settings of this run](#settings-of-this-run)). ")
+        if abs(fn[0] - 1) >= 0.05:
+            txt += ("The ratios against stored competitor runs therefore " +
+                    ("understate" if fn[0] > 1 else "overstate") +
+                    " kifmm's advantage by about that factor; ")
+        else:
+            txt += "CPU times of the two sessions agree to within 5 % in the median; "
+        txt += ("where every run of a competitor at that N was re-measured in kifmm's session, "
+                "that ratio is given in parentheses. ")
+    else:
+        txt += ("No stored competitor setting was re-measured in the kifmm runs' session: "
+                "the ratios compare CPU times of different sessions (earlier re-measurements: "
+                "table under [Settings of this run](#settings-of-this-run)). ")
+    big = [r for r in refs if r.get("c_direct_sum") and 0 < r.get("sampled", 0) < r["natoms"]]
+    if big:
+        rc = sorted({str(r.get("commit")) for r in big})
+        txt += ("The direct sums of the 1e6 rows (`(s)`) were timed on the sample when the "
+                "references were remade" + (", in kifmm's session." if rc == [kc] else
+                                            f" (commit {', '.join(rc)}).") )
+    return txt + "\n"
+
+
+def small_n_note(recs, results_path, rechecks):
+    """N ~ 1e3 (at most 2500 atoms): the depths of kifmm's trees, kifmm's time against the
+    direct sum re-measured in the same session, and against the newest archived engine."""
+    kc = kifmm_commit(recs)
+    small = [r for r in ok_runs(recs, solver="kifmm")
+             if r["natoms"] <= 2500 and r.get("depth") is not None]
+    if not small:
+        return ""
+    parts = []
+    for per, word in ((False, "open boundaries"), (True, "periodic boundaries")):
+        rs = [r for r in small if bool(r.get("periodic")) == per]
+        if not rs:
+            continue
+        byd = {}
+        for r in rs:
+            byd.setdefault(r["depth"], []).append(r)
+        main_d = max(byd, key=lambda d: len(byd[d]))
+        items = []
+        for d in sorted(byd):
+            v = byd[d]
+            it = f"depth {d} in {len(v)}"
+            if d != main_d and len(v) <= 8:
+                it += " (" + ", ".join(f"{r['case']} {nlabel(r['n'], r['natoms'])} "
+                                       f"P={r.get('order')}"
+                                       for r in sorted(v, key=lambda x: (x["case"], nkey(x["n"]),
+                                                       x.get("order") or 0))) + ")"
+            items.append(it)
+        parts.append(", ".join(items) + f" of {len(rs)} settings with {word}")
+    txt = ("At N ~ 1e3 (at most 2500 atoms) the trees that kspace kifmm chooses from the atom "
+           "positions at the first evaluation (kifmm::choose_tree) have " + "; ".join(parts) +
+           "; with open boundaries depth 0 or 1 is all near field (a direct sum in one or 8 "
+           "leaves, exact to round-off). ")
+    # kifmm against kifmm::direct_sum re-measured in the kifmm runs' session
+    q = []
+    for (case, n, spec), x in sorted(rechecks.items(), key=str):
+        if spec != "direct" or x.get("commit") != kc:
+            continue
+        ks = ok_runs(recs, case, n, "kifmm")
+        if not ks or ks[0]["natoms"] > 2500:
+            continue
+        tk, _ = time_at(ks, 1e-7)
+        if tk:
+            q.append((tk / x["c_eval"], f"{case} {nlabel(n, ks[0]['natoms'])}"))
+    if q:
+        txt += ("kifmm's CPU time at 1e-7 over that of kifmm::direct_sum re-measured in the same "
+                "session: " + ", ".join(f"{lab} {v:.2f}" for v, lab in q) + ". ")
+    arch = archives(results_path)
+    if arch:
+        old = archived_runs(results_path, arch[0])
+        v = sorted(r["t_eval"] / old[(r["case"], r["n"], r["spec"])]["c_eval"]
+                   for r in small if (r["case"], r["n"], r["spec"]) in old
+                   and same_atoms(r, old[(r["case"], r["n"], r["spec"])]))
+        if v:
+            txt += (f"Against the archived runs of {arch[0][len('kifmm-'):-len('.jsonl')]} on "
+                    f"the same atoms there, CPU eval new / old is a median {median(v):.2f} "
+                    f"({v[0]:.2f} - {v[-1]:.2f}, {len(v)} settings; [comparison with the "
+                    "archived runs](#kifmm-on-the-current-engine-versus-the-archived-earlier-"
+                    "runs)).")
+    return txt
+
+
 def write_doc(recs, doc, plots, profile, cases_path, results_path):
     d = os.path.dirname(os.path.abspath(doc))
     rel = {k: os.path.relpath(v, d) for k, v in plots.items()}
@@ -1129,33 +1419,17 @@ def write_doc(recs, doc, plots, profile, cases_path, results_path):
       "campaign; below 1x kifmm is slower; `~`: one of the times is a bound or an N^2 "
       "extrapolation, see below; `msm n/r`: no run of that solver reached that error). Full "
       "tables: [speed ratio at matched error](#speed-ratio-at-matched-error).\n")
-    w("The kifmm runs, the exact references and the competitors' runs on the remade scene "
-      "snapshots are from a later session of the machine than the other competitor runs, "
-      "and CPU times were longer in that session: re-measured there, the competitors' "
-      "settings took a median 1.2x their stored CPU time, kifmm's 1.0x (table under "
-      "[Settings of this run](#settings-of-this-run)). The ratios against stored competitor "
-      "runs therefore understate kifmm's advantage by about that factor; where every run of "
-      "a competitor at that N was re-measured in kifmm's session, that ratio is given in "
-      "parentheses. The direct sums of the 1e6 rows (`(s)`) were timed on the sample "
-      "when the references were remade, in kifmm's session.\n")
+    w(session_paragraph(recs, results_path))
     w(summary(recs, cases_of(recs), recheck_map(results_path)))
     w("\n## Where kifmm is slower\n")
+    fn = session_factor(recs, results_path, kifmm_commit(recs))
     w("Every case, N and matched error where another solver needs less CPU time than kifmm "
       "for the same measured error (`~`: one time is a bound or an extrapolation), and where "
       "the competitor's runs were re-measured in the session of the kifmm runs, the ratio of "
-      "that session (the stored competitor runs are from an earlier session whose CPU times "
-      "were shorter, see [Settings of this run](#settings-of-this-run)). At "
-      "N ~ 1e3 with open boundaries the tree depth that the cost model chooses "
-      "(kifmm::choose_tree) is 0 at every order for 1000 atoms and at the orders above 3 for "
-      "1094-2000 atoms (P = 3: depth 2; periodic boundaries: depth 1-2): kifmm's octree is "
-      "then a single leaf, a direct sum, as fast as kifmm::direct_sum "
-      "measured in the same session (0.94-1.02x of its time on 1000-1094 atoms: uniform, "
-      "plummer, clusters, platelets, charges-box; 1.03x slower on the charges-box end "
-      "state). The engine at 923c304 (archived runs, per-order leaf sizes) had depth 1 there "
-      "at 4-9 of the 9 settings (8 adjacent leaves, all near field, the same exact result) in "
-      "0.8x of the direct sum's time of its session: at N ~ 1e3 the one-leaf tree of the "
-      "cost model is about 1.25x slower than the depth-1 tree (see [the comparison with the "
-      "archived runs](#kifmm-on-the-current-engine-versus-the-archived-earlier-runs)).\n")
+      "that session" + ((" (the stored competitor runs are from an earlier session whose CPU "
+                         "times were " + ("shorter" if fn[0] > 1 else "longer") + ", see "
+                         "[Settings of this run](#settings-of-this-run))") if fn else "") +
+      ". " + small_n_note(recs, results_path, recheck_map(results_path)) + "\n")
     w(losses(recs, cases_of(recs), recheck_map(results_path)))
     w("## What is measured\n")
     w("""All solvers see the same atoms (one LAMMPS data file per configuration and N, `units lj`,
@@ -1195,10 +1469,11 @@ stay comparable between runs made hours apart on the shared machine:
   `/proc/self/clear_refs` after read_data). Each solver runs in its own child process, so
   the peak is its own.
 * kifmm: `pair_style none`, `kspace_style kifmm ACC` (order from the calibration table of
-  the boundary, leaf size from the tree depth of least modelled cost for N uniform atoms,
-  kifmm::choose_tree) or `kspace_modify kifmm order P` for explicit orders (`P=` in the
-  tables; leaf size again from choose_tree for that order). The tree depth of each run is
-  `depth` in results.jsonl.
+  the boundary) or `kspace_modify kifmm order P` for explicit orders (`P=` in the tables).
+  The leaf size is chosen at the first evaluation of each run from the atom positions
+  (one rank: kifmm::choose_tree(kernel, options, n, xyz) builds the octree of the atoms for a
+  few candidate leaf sizes and keeps the one of least modelled cost). The tree depth of each
+  run is `depth` in results.jsonl.
 * msm: `pair_style coul/msm C*s` (s = mean atom spacing of the box, `(V/N)^(1/3)`),
   `pair_modify table 0`, `kspace_style msm A*F_rms`, `kspace_modify cutoff/adjust no` and
   optionally `order`. LAMMPS's msm accuracy is absolute (relative to the force between two
@@ -1246,7 +1521,7 @@ stay comparable between runs made hours apart on the shared machine:
         w("Runs with a per-run CPU limit other than the profile's (`run_bench.py --timeout`; "
           "the pending periodic competitor runs at N = 1e5, measured later): " + lim + "\n")
     w("## Settings of this run\n")
-    w(settings_table(recs))
+    w(settings_table(recs, results_path))
     rt = recheck_table(recs, results_path)
     if rt:
         w("\nHow well CPU times measured hours apart agree: settings of the campaign measured "
@@ -1279,9 +1554,13 @@ cases `direct` is the exact Ewald sum, run at N <= 5000 only.
     if "time_vs_n" in rel:
         w(f"\n![time per evaluation versus N at matched error]({rel['time_vs_n']})\n")
     w("\n## kifmm scaling with N at fixed error\n")
+    sd = sorted({r["depth"] for r in ok_runs(recs, solver="kifmm") if r["natoms"] <= 2500
+                 and not r.get("periodic") and r.get("depth") is not None})
     w("Least-squares exponent k of time ~ N^k over the N >= 5000 of each case (1 = O(N)); "
-      "at N ~ 1000 the octree of kifmm is a single leaf at most orders (depth 0 from the cost "
-      "model, open boundaries), so kifmm is a direct sum there and is left out of the fit.\n")
+      "at N ~ 1000 the octree of kifmm is small" +
+      (f" (depth {sd[0]}" + (f" - {sd[-1]}" if len(sd) > 1 else "") + " with open "
+       "boundaries; depth 0 or 1 is all near field, a direct sum)" if sd else "") +
+      ", so those N are left out of the fit.\n")
     w(scaling_table(recs, main_cases + hard_cases))
     w("\n## Hard cases\n")
     w("""* **dipole3**: neutral rigid clumps of 3 pebbles with charges -1, 0, +1 (the middle pebble
@@ -1298,9 +1577,7 @@ cases `direct` is the exact Ewald sum, run at N <= 5000 only.
 * **collapse**: a Plummer sphere 10 times more concentrated (scale radius 0.005 in the unit
   box) as a stand-in for the end state of a gravitational collapse.
 * **highest orders**: kifmm at P = 12 and 14 (explicit `order`) on every case: the error must
-  keep falling. The cost model gives these orders a single leaf (depth 0, a direct sum,
-  error at round-off) up to N ~ 1e4 with open boundaries (the 1e4 cases and the scenes), so
-  their far field is tested at N ~ 1e5, the rows of the order table below.
+  keep falling. """ + high_order_note(recs) + """
 * **scene snapshots** (`scene_*`, N shown with the state): the start and end states of the
   four example scenes (charges-box, dipoles, gravity-collapse, platelets), quick variants,
   made by bench/solvers/scene_snapshots.py, which runs a copy of each example with two added
@@ -1310,18 +1587,8 @@ cases `direct` is the exact Ewald sum, run at N <= 5000 only.
   (boundary p p p), the others open. Clump net-force errors for dipoles (3 pebbles) and
   platelets (182 pebbles per platelet in the quick variant). charges-box and
   gravity-collapse carry charges of one sign: LAMMPS's msm stops on them ("System is not
-  charge neutral"), so only kifmm and the direct sums run there. charges-box has 1000 atoms
-  in the quick variant: kifmm's octree is a single leaf (depth 0, a direct sum) at every order
-  at that size. The snapshots were made again at commit c4d85d4 (the campaign's work
-  directory had to be rebuilt): the start states of charges-box, dipoles and
-  gravity-collapse are the same atoms as before (same reference forces), their end states
-  differ slightly (the scenes ran on a changed engine: relative change of the RMS reference
-  force 1e-4 to 1e-2), and the platelets example changed (17 two-layer AA platelets, commit
-  b36314c; background drag, 7bb80cc: 3094 atoms, was 4004). Every solver was run again on
-  those five snapshots;
-  the competitors' runs on the earlier snapshots are kept apart in
-  bench/solvers/results/scene-snapshots-2a60b3d.jsonl and not used in this report.
-""")
+  charge neutral"), so only kifmm and the direct sums run there. """ +
+      scene_snapshot_note(recs, results_path) + "\n")
     w(hard_table(recs, hard_cases))
     crt = clump_ratio_table(recs, hard_cases)
     if crt:
@@ -1348,8 +1615,9 @@ cases `direct` is the exact Ewald sum, run at N <= 5000 only.
         for fn, t in ects:
             why = ARCHIVES.get(fn, "")
             dcs = depth_change_summary(recs, results_path, fn)
-            w(f"\nAgainst bench/solvers/results/{fn}" + (f" ({why})" if why else "") + ":" +
-              ENGINE_CHANGE_NOTES.get(fn, "") + (" " + dcs if dcs else "") + "\n\n")
+            w(f"\nAgainst bench/solvers/results/{fn}" + (f" ({why})" if why else "") + "." +
+              archive_session_note(recs, results_path, fn) + (" " + dcs if dcs else "") +
+              "\n\n")
             w(t)
     w("\n## Pareto fronts (error versus time) per configuration\n")
     w("Filled markers: relative force error of the atoms; hollow markers: clump net-force "

@@ -88,6 +88,15 @@ double KSpaceKIFMM::strength_of(int i) const
   return atom->q[i];
 }
 
+// Atoms of nonzero strength on all ranks (the sources and targets of an evaluation).
+bigint KSpaceKIFMM::count_strong_atoms() const
+{
+  bigint mine = 0, all = 0;
+  for (int i = 0; i < atom->nlocal; ++i) mine += strength_of(i) != 0.0;
+  MPI_Allreduce(&mine, &all, 1, MPI_LMP_BIGINT, MPI_SUM, world);
+  return all;
+}
+
 double KSpaceKIFMM::force_prefactor() const
 {
   // engine: grad = d/dx_i sum_j s_j G(x_i, x_j); potential energy U = c/2 sum_i s_i phi_i
@@ -151,6 +160,8 @@ void KSpaceKIFMM::init()
   // cost for this N spread uniformly, the same on every rank
   kifmm::TreeChoice tree{0, -1, 0.0};
   tree_choice_pending = false;
+  // the tree holds only atoms of nonzero strength (zero-strength atoms are not gathered)
+  const bigint nstrong = count_strong_atoms();
   if (kset.cache_dir == "none")
     opt.cache_dir.clear();
   else
@@ -159,7 +170,7 @@ void KSpaceKIFMM::init()
   if (kset.leaf > 0) {
     opt.leaf_size = kset.leaf;
   } else {
-    tree = kifmm::choose_tree(opt.order, (std::size_t) atom->natoms, periodic);
+    tree = kifmm::choose_tree(opt.order, (std::size_t) nstrong, periodic);
     opt.leaf_size = tree.leaf_size;
     if (!distributed()) {
       tree_choice_pending = true;
@@ -191,14 +202,14 @@ void KSpaceKIFMM::init()
       mesg += fmt::format("\n  order = {}, leaf size chosen from the atom positions at the first "
                           "evaluation (least modelled cost of the actual trees; for {} uniformly "
                           "spread atoms, {} boundaries: leaf size {}, tree depth {})",
-                          engine_options.order, atom->natoms, periodic ? "periodic" : "open",
+                          engine_options.order, nstrong, periodic ? "periodic" : "open",
                           tree.leaf_size, tree.depth);
     else
       mesg += fmt::format("\n  order = {}, leaf size = {}", engine_options.order, engine_options.leaf_size);
     if (tree.depth >= 0 && !tree_choice_pending)
       mesg += fmt::format(" (tree depth {} for {} uniformly spread atoms, {} boundaries: least "
                           "modelled cost)",
-                          tree.depth, atom->natoms, periodic ? "periodic" : "open");
+                          tree.depth, nstrong, periodic ? "periodic" : "open");
     mesg += "\n";
     if (est >= 0)
       mesg += fmt::format("  requested relative force error = {:.3g}, calibrated = {:.3g}\n",

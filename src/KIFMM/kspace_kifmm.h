@@ -59,6 +59,7 @@ class KSpaceKIFMM : public KSpace {
   bool distributed() const;
 
   double strength_of(int i) const;
+  bigint count_strong_atoms() const;
   double force_prefactor() const;    // F_i = prefactor * s_i * grad_i
   double energy_prefactor() const;   // E = prefactor * 0.5 * sum s_i phi_i
   void gather_points();

@@ -278,10 +278,17 @@ TEST_F(Periodic, MeasuredErrorWithinRequestedAccuracy)
 // Open boundaries (f f f) get their own choice.
 class PeriodicTreeChoice : public Periodic {
  protected:
-  void expect_cost_model_choice(const char *boundary)
+  // zero_charge: extra atoms of charge zero, which are not in the tree and must not be counted
+  void expect_cost_model_choice(const char *boundary, int zero_charge = 0)
   {
     const bool periodic = boundary[0] == 'p';
-    load(uniform_cube(3000, 48), boundary);
+    Configuration c3000 = uniform_cube(3000, 48);
+    Configuration zero = uniform_cube(zero_charge, 49);
+    for (std::size_t i = 0; i < zero.x.size(); ++i) {
+      c3000.x.push_back(zero.x[i]);
+      c3000.q.push_back(0.0);
+    }
+    load(c3000, boundary);
     commands("pair_style zero 0.01\npair_coeff * *\nkspace_style kifmm 1e-5");
     const std::string out = output_of("run 0 post no");
     const int order = kifmm::choose_order(kifmm::KernelSpec{}, 1e-5, periodic).order;
@@ -315,6 +322,12 @@ TEST_F(PeriodicTreeChoice, PeriodicBoundaries)
 TEST_F(PeriodicTreeChoice, OpenBoundaries)
 {
   expect_cost_model_choice("f f f");
+}
+
+// 3000 charged atoms and 2000 of charge zero: the uniform choice is that of 3000 atoms
+TEST_F(PeriodicTreeChoice, ZeroChargeAtomsAreNotCounted)
+{
+  expect_cost_model_choice("p p p", 2000);
 }
 
 TEST_F(Periodic, CheckUsesThePeriodicReference)

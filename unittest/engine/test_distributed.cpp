@@ -55,6 +55,15 @@ std::vector<int> blocks(const Points &p, int nranks)
   return o;
 }
 
+// quadrants at the origin ((x > 0) + 2 (y > 0)), folded onto the ranks: aligned with the cells
+// of a root centred at the origin
+std::vector<int> quadrants(const Points &p, int nranks)
+{
+  std::vector<int> o(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i) o[i] = ((p.xyz[3 * i] > 0) + 2 * (p.xyz[3 * i + 1] > 0)) % nranks;
+  return o;
+}
+
 std::vector<int> random_owner(const Points &p, int nranks)
 {
   std::vector<int> o(p.size());
@@ -66,7 +75,8 @@ std::vector<int> all_on_last(const Points &p, int nranks) { return std::vector<i
 
 struct Result {
   double grad = 0, pot = 0;    // max abs difference / max abs serial value, over all ranks
-  std::size_t ghosts = 0, own = 0, comm_bytes = 0;
+  std::size_t ghosts = 0, own = 0, comm_bytes = 0;    // max over ranks
+  std::size_t let_cells = 0, let_bytes = 0;           // summed over ranks
 };
 
 // periodic_half > 0: periodic boundaries, the cell [-periodic_half, periodic_half]^3
@@ -114,7 +124,11 @@ Result compare(const K &k, const kifmm::KernelSpec &spec, const Points &all, con
   MPI_Allreduce(MPI_IN_PLACE, e, 2, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
   unsigned long long c[3] = {dist.stats().n_ghosts, idx.size(), dist.stats().comm_bytes};
   MPI_Allreduce(MPI_IN_PLACE, c, 3, MPI_UNSIGNED_LONG_LONG, MPI_MAX, MPI_COMM_WORLD);
+  unsigned long long l[2] = {dist.stats().let_cells, dist.stats().let_bytes};
+  MPI_Allreduce(MPI_IN_PLACE, l, 2, MPI_UNSIGNED_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
   Result r;
+  r.let_cells = l[0];
+  r.let_bytes = l[1];
   r.grad = e[0];
   r.pot = e[1];
   r.ghosts = c[0];
@@ -132,12 +146,12 @@ Points with_zero_charges(Points p)
 const Partition kPartitions[] = {slabs_last_empty, blocks, random_owner, all_on_last};
 const char *kPartitionNames[] = {"slabs (last rank empty)", "blocks", "random", "all on the last rank"};
 
-void check_all_partitions(const Points &p, int top_level, int leaf = 24, double periodic_half = 0.0)
+void check_all_partitions(const Points &p, int top_level, int leaf = 24, double periodic_half = 0.0, int order = 6)
 {
   kifmm::LaplaceKernel k;
   kifmm::KernelSpec spec;
   for (int j = 0; j < 4; ++j) {
-    Result r = compare(k, spec, p, kPartitions[j], top_level, leaf, 6, periodic_half);
+    Result r = compare(k, spec, p, kPartitions[j], top_level, leaf, order, periodic_half);
     EXPECT_LE(r.grad, 1e-10) << kPartitionNames[j] << ", top level " << top_level;
     EXPECT_LE(r.pot, 1e-10) << kPartitionNames[j] << ", top level " << top_level;
   }
@@ -258,6 +272,82 @@ TEST(Distributed, GhostsAreLocal)
   check_ghosts_are_local(uniform_cube(8000, 19), 0.0);
 }
 
+// Locally essential trees: below an open frontier cell that a rank holds no points of, it
+// receives only the part of the subtree its lists reach (cells with densities, the points of the
+// leaves next to its cells), not all points of the cell. Top level 2 (frontier cells of a
+// quarter of the root), ranks in quadrants aligned with them (no frontier cell is shared):
+// equal to serial, LET cells sent, and the ghost points about the layer of leaves next to the
+// rank's cells instead of the whole neighbouring frontier cells (rule i).
+void check_let(Points p, double periodic_half)
+{
+  const int me = rank_of_world(), np = size_of_world();
+  if (periodic_half == 0) {    // the root [-1, 1]^3 (to 1e-8): cells aligned with the quadrants
+    const double corners[6] = {-1, -1, -1, 1, 1, 1};
+    p.xyz.insert(p.xyz.end(), corners, corners + 6);
+    p.q.insert(p.q.end(), {1.0, -1.0});
+  }
+  kifmm::LaplaceKernel k;
+  kifmm::KernelSpec spec;
+  Result r = compare(k, spec, p, quadrants, 2, 64, 6, periodic_half);
+  EXPECT_LE(r.grad, 1e-10);
+  EXPECT_LE(r.pot, 1e-10);
+  EXPECT_GT(r.let_cells, 0u);
+  // points of other ranks in the level-2 cells touching this rank's level-2 cells
+  kifmm::RootBox root;
+  if (periodic_half > 0) root.half_width = periodic_half;
+  else root = kifmm::bounding_cube(p.size(), p.xyz.data(), 0, nullptr);
+  const std::vector<int> owner = quadrants(p, np);
+  auto cell_of = [&](std::size_t i, int d) {
+    const double u = (p.xyz[3 * i + d] - root.center[d] + root.half_width) / (2 * root.half_width);
+    return std::min(3, std::max(0, (int) std::floor(4 * u)));
+  };
+  std::vector<char> own(64, 0);
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (owner[i] == me) own[cell_of(i, 0) + 4 * cell_of(i, 1) + 16 * cell_of(i, 2)] = 1;
+  auto near_own = [&](int cx, int cy, int cz) {
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          int x = cx + dx, y = cy + dy, z = cz + dz;
+          if (periodic_half > 0) {
+            x = (x + 4) % 4;
+            y = (y + 4) % 4;
+            z = (z + 4) % 4;
+          } else if (x < 0 || y < 0 || z < 0 || x > 3 || y > 3 || z > 3)
+            continue;
+          if (own[x + 4 * y + 16 * z]) return true;
+        }
+    return false;
+  };
+  unsigned long long whole = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const int cx = cell_of(i, 0), cy = cell_of(i, 1), cz = cell_of(i, 2);
+    if (owner[i] != me && !own[cx + 4 * cy + 16 * cz] && near_own(cx, cy, cz)) ++whole;
+  }
+  MPI_Allreduce(MPI_IN_PLACE, &whole, 1, MPI_UNSIGNED_LONG_LONG, MPI_MAX, MPI_COMM_WORLD);
+  if (me == 0)
+    printf("  %s: max over ranks: own %zu, ghosts %zu, whole neighbouring frontier cells %llu; LET cells %zu, "
+           "LET bytes %zu (all ranks)\n",
+           periodic_half > 0 ? "periodic" : "open", r.own, r.ghosts, whole, r.let_cells, r.let_bytes);
+  // leaves here are an eighth of the root (a frontier cell is two leaves wide): about half
+  EXPECT_LT((double) r.ghosts, 0.6 * (double) whole);
+}
+
+// The LET's choice of points (U, X, W lists of the asking rank) with leaves that are sent as
+// densities (at order 6 with leaves of 24 most LET cells are small enough to be sent as points,
+// which hides a missing point rule): order 4, leaves of up to 48 points, clustered sets
+TEST(Distributed, LetWithLargeLeavesEqualsSerial)
+{
+  for (int top : {0, 2, 3}) check_all_partitions(plummer(3000, 12), top, 24, 0.0, 4);
+  for (int top : {0, 2}) check_all_partitions(neutral(periodic_clusters(2400, 28)), top, 48, 1.0, 4);
+}
+
+TEST(Distributed, LocallyEssentialTreesBelowCoarseFrontierCells)
+{
+  if (size_of_world() < 2) GTEST_SKIP() << "needs 2 or more ranks";
+  check_let(uniform_cube(30000, 24), 0.0);
+}
+
 // ---------------------------------------------------------------- periodic boundaries
 
 TEST(Distributed, PeriodicUniformEqualsSerial)
@@ -290,6 +380,12 @@ TEST(Distributed, PeriodicFewPointsEqualSerial)
 TEST(Distributed, PeriodicYukawaEqualsSerial)
 {
   check_yukawa(periodic_clusters(2400, 36), 1.0);
+}
+
+TEST(Distributed, PeriodicLocallyEssentialTrees)
+{
+  if (size_of_world() < 2) GTEST_SKIP() << "needs 2 or more ranks";
+  check_let(neutral(uniform_cube(30000, 38)), 1.0);
 }
 
 TEST(Distributed, PeriodicGhostsAreLocal)

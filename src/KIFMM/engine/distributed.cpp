@@ -231,6 +231,10 @@ void distributed_setup(Communicator &comm, int top_level, int leaf_size, int max
       out.frontier.push_back(c);
     }
   const int nf = (int) out.frontier.size();
+  out.frontier_index = findex;
+  out.n_top_global = ntop;
+  out.top_internal.assign(ntop, 0);
+  for (int c = 0; c < ntop; ++c) out.top_internal[c] = top.cells[c].n_children > 0;
 
   // this rank's points by frontier cell (counting sort, input order inside a cell)
   std::vector<int> fstart(nf + 1, 0), fpoints(n);
@@ -259,12 +263,19 @@ void distributed_setup(Communicator &comm, int top_level, int leaf_size, int max
   }
   out.responsible.assign(nf, 0);
   for (int f = 0; f < nf; ++f) out.responsible[f] = ostart[f + 1] > ostart[f] && occ[ostart[f]] == me;
+  std::vector<char> occupied(nf, 0);
+  for (int f : mine) occupied[f] = 1;
 
   // frontier cells whose points this rank needs (doc/design.md: rules i-iii); periodic: the
-  // neighbours through the cell's faces too (images)
+  // neighbours through the cell's faces too (images). How: kWhole, all points from every rank
+  // holding some (the cells this rank holds points of, global leaves, and the small subtrees of
+  // rule iii); kLet, the other open cells: the part of their subtree this rank's lists reach,
+  // from the responsible rank (exchange_let)
+  enum : char { kNone = 0, kLet = 1, kWhole = 2 };
   const Shifts shifts(periodic);
-  std::vector<char> need(nf, 0), own_top(ntop, 0);
-  auto mark = [&](int c) { need[findex[c]] = 1; };
+  std::vector<char> need(nf, kNone), own_top(ntop, 0);
+  auto mark = [&](int c) { need[findex[c]] = std::max<char>(need[findex[c]], kLet); };
+  auto mark_whole = [&](int c) { need[findex[c]] = kWhole; };
   for (int f : mine) {
     int c = out.frontier[f];
     touching(top, shifts, top.cells[c], mark);    // (i)
@@ -295,35 +306,48 @@ void distributed_setup(Communicator &comm, int top_level, int leaf_size, int max
           const Cell &D = top.cells[d];
           if (D.gsrc == 0) continue;
           if (cells_adjacent_shifted(D, sh.data(), B)) st.push_back(d);
-          else if (D.level > B.level && (int) D.gsrc <= nsurf) below(top, d, mark);
+          else if (D.level > B.level && (int) D.gsrc <= nsurf) below(top, d, mark_whole);
         }
       }
     }
   }
 
-  // requests: needed frontier cells from each rank that holds points there
-  std::vector<std::vector<int>> req(nranks), got;
+  // requests: whole cells from each rank that holds points there; LETs later (exchange_let),
+  // from the responsible rank
+  // (a cell this rank holds points of and is responsible for comes whole; where another rank is
+  // responsible, that rank imports this rank's points of it and sends the LET of the rest)
   for (int f = 0; f < nf; ++f)
-    if (need[f])
+    if (need[f] == kLet && (out.responsible[f] || !top.open[out.frontier[f]])) need[f] = kWhole;
+  out.complete.assign(nf, 0);
+  for (int f = 0; f < nf; ++f) out.complete[f] = need[f] == kWhole;
+  std::vector<std::vector<int>> req(nranks), got;
+  out.let_from.assign(nranks, {});
+  for (int f = 0; f < nf; ++f) {
+    if (need[f] == kWhole)
       for (int k = ostart[f]; k < ostart[f + 1]; ++k)
         if (occ[k] != me) req[occ[k]].push_back(f);
+    if (need[f] == kLet && ostart[f + 1] > ostart[f]) out.let_from[occ[ostart[f]]].push_back(f);
+  }
   {
     Timer t(out.t_comm);
     comm.alltoallv(req, got);
   }
   std::vector<std::vector<double>> send(nranks), recv;
   for (int r = 0; r < nranks; ++r)
-    for (int f : got[r])
+    for (int f : got[r]) {
       for (int k = fstart[f]; k < fstart[f + 1]; ++k) {
         const int i = fpoints[k];
         send[r].insert(send[r].end(), {xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2], q[i]});
       }
+    }
   for (int r = 0; r < nranks; ++r) out.ghost_bytes += sizeof(double) * send[r].size();
   {
     Timer t(out.t_comm);
     comm.alltoallv(send, recv);
   }
   std::size_t nghost = 0;
+  out.ghost_from.assign(nranks + 1, 0);
+  for (int r = 0; r < nranks; ++r) out.ghost_from[r + 1] = out.ghost_from[r] + recv[r].size() / 4;
   for (const auto &v : recv) nghost += v.size() / 4;
   out.n_own = n;
   out.xyz.resize(3 * (n + nghost));
@@ -338,6 +362,250 @@ void distributed_setup(Communicator &comm, int top_level, int leaf_size, int max
       out.xyz[3 * k + 2] = v[j + 2];
       out.q[k] = v[j + 3];
     }
+}
+
+
+namespace {
+
+// closed cells a and b touch or overlap (periodic: some image of a)
+bool touch(const Cell &a, const Cell &b, const Shifts &shifts)
+{
+  for (const auto &sh : shifts.s)
+    if (cells_adjacent_shifted(a, sh.data(), b)) return true;
+  return false;
+}
+
+// A cell of the asking rank's tree that holds its own points (a target cell of its lists), or
+// (coarse) a frontier cell of its points that it does not hold completely, standing for the
+// unknown cells of its points inside: like a leaf, but its W-list partners may touch it.
+struct AskingCell {
+  Cell cell;
+  bool leaf, coarse;
+};
+
+// Fragment of the LET of tree cell cf for one asking rank (its cells touching cf):
+// [ncells, npoints, ncells x (parent, octant, gsrc, gtrg, kind, has_density), densities, points]
+// with parent = index in the fragment (-1: cf itself), kind 0 leaf, 1 children follow, 2 split
+// in the global tree but children not sent.
+void let_fragment(const Octree &tree, int cf, const std::vector<AskingCell> &asking, const Shifts &shifts,
+                  const std::vector<double> &up, int nsurf, const DistributedData &dd, std::size_t skip_begin,
+                  std::size_t skip_end, std::vector<double> &out)
+{
+  const auto &cells = tree.cells;
+  auto children_needed = [&](const Cell &p) {    // colleagues, V lists, descent of U/W
+    for (const AskingCell &y : asking)
+      if ((y.leaf || y.coarse ? y.cell.level <= p.level : y.cell.level == p.level) && touch(p, y.cell, shifts))
+        return true;
+    return false;
+  };
+  auto points_needed = [&](const Cell &d) {    // leaves: U (own leaf) and X (parent of an own leaf)
+    for (const AskingCell &y : asking)
+      if ((y.leaf || y.coarse || y.cell.level >= d.level) && touch(d, y.cell, shifts)) return true;
+    return false;
+  };
+  auto w_direct = [&](const Cell &a, const Cell &parent) {    // a in W(B) of an own leaf B, direct
+    if (a.gsrc == 0 || (int) a.gsrc > nsurf) return false;
+    for (const AskingCell &y : asking)
+      if ((y.leaf || y.coarse) && y.cell.level < a.level && touch(parent, y.cell, shifts) &&
+          (y.coarse || !touch(a, y.cell, shifts)))
+        return true;
+    return false;
+  };
+  std::vector<int> emitted, parent_slot, kind;
+  std::vector<char> density;
+  std::vector<std::pair<uint32_t, uint32_t>> ranges;    // target ranges whose points are sent
+  std::vector<int> queue, slot_of;                      // cells whose children are sent
+  if (children_needed(cells[cf])) {
+    queue.push_back(cf);
+    slot_of.push_back(-1);
+  }
+  for (std::size_t qi = 0; qi < queue.size(); ++qi) {
+    const Cell &P = cells[queue[qi]];
+    for (int k = 0; k < P.n_children; ++k) {
+      const int d = P.first_child + k;
+      const Cell &D = cells[d];
+      int kd = 0;
+      if (!D.leaf()) {
+        kd = children_needed(D) ? 1 : 2;
+        if (kd == 1) {
+          queue.push_back(d);
+          slot_of.push_back((int) emitted.size());
+        }
+      }
+      emitted.push_back(d);
+      parent_slot.push_back(slot_of[qi]);
+      kind.push_back(kd);
+      // points instead of the density where they take fewer bytes (the asking rank computes
+      // the density from them: all points of the cell, so its subtree is the global one)
+      const bool by_points = D.gsrc > 0 && 4 * (int) D.gtrg < nsurf;
+      density.push_back(D.gsrc > 0 && !by_points);
+      if (by_points || (D.leaf() && points_needed(D)) || w_direct(D, P)) ranges.emplace_back(D.trg_begin, D.trg_end);
+    }
+  }
+  // points of the marked cells once (nested ranges merged)
+  std::sort(ranges.begin(), ranges.end());
+  std::vector<int> pts;
+  uint32_t reach = 0;
+  for (const auto &r : ranges) {
+    for (uint32_t i = std::max(r.first, reach); i < r.second; ++i)
+      if (tree.trg_order[i] < skip_begin || tree.trg_order[i] >= skip_end) pts.push_back((int) tree.trg_order[i]);
+    reach = std::max(reach, r.second);
+  }
+  out.push_back((double) emitted.size());
+  out.push_back((double) pts.size());
+  for (std::size_t k = 0; k < emitted.size(); ++k) {
+    const Cell &D = cells[emitted[k]];
+    out.insert(out.end(), {(double) parent_slot[k], (double) (D.prefix & 7), (double) D.gsrc, (double) D.gtrg,
+                           (double) kind[k], density[k] ? 1.0 : 0.0});
+  }
+  for (std::size_t k = 0; k < emitted.size(); ++k)
+    if (density[k]) out.insert(out.end(), &up[(std::size_t) emitted[k] * nsurf], &up[(std::size_t) (emitted[k] + 1) * nsurf]);
+  for (int i : pts) out.insert(out.end(), {dd.xyz[3 * i], dd.xyz[3 * i + 1], dd.xyz[3 * i + 2], dd.q[i]});
+}
+
+}    // namespace
+
+void exchange_let(Communicator &comm, const Octree &tree, std::size_t n_own, const std::vector<double> &up, int nsurf,
+                  bool periodic, DistributedData &dd)
+{
+  const int nranks = comm.size();
+  const Shifts shifts(periodic);
+  TopTree &top = dd.top;
+  const int ntop = dd.n_top_global;
+  const auto &cells = tree.cells;
+  std::vector<int> local_of(ntop, -1);
+  for (std::size_t c = 0; c < cells.size(); ++c)
+    if (tree.top_index[c] >= 0 && tree.top_index[c] < ntop) local_of[tree.top_index[c]] = (int) c;
+  // requests: per frontier cell F, this rank's cells with own points that touch F
+  // [f, count, count x (level, ix, iy, iz, leaf)]
+  std::vector<uint32_t> own_before(tree.trg_order.size() + 1, 0);    // own targets before a sorted position
+  for (std::size_t i = 0; i < tree.trg_order.size(); ++i) own_before[i + 1] = own_before[i] + (tree.trg_order[i] < n_own);
+  auto holds_own = [&](const Cell &c) { return own_before[c.trg_end] > own_before[c.trg_begin]; };
+  auto incomplete_frontier = [&](int c) {
+    const int t = tree.top_index[c];
+    return t >= 0 && t < ntop && dd.frontier_index[t] >= 0 && !dd.complete[dd.frontier_index[t]];
+  };
+  std::vector<std::vector<int>> req(nranks), got;
+  for (int r = 0; r < nranks; ++r)
+    for (int f : dd.let_from[r]) {
+      const int top_f = dd.frontier[f];
+      const Cell &F = top.cells[top_f];
+      std::vector<int> &q = req[r];
+      q.push_back(f);
+      const std::size_t at = q.size();
+      q.push_back(0);
+      std::vector<int> stack{0};
+      while (!stack.empty()) {
+        const int c = stack.back();
+        const Cell &C = cells[c];
+        stack.pop_back();
+        if (!holds_own(C) || !touch(C, F, shifts)) continue;
+        if (incomplete_frontier(c)) {    // 0 non-leaf, 1 leaf, 2 coarse (F itself: the sender knows)
+          if (tree.top_index[c] != top_f) {
+            q.insert(q.end(), {C.level, C.ix, C.iy, C.iz, 2});
+            ++q[at];
+          }
+          continue;
+        }
+        q.insert(q.end(), {C.level, C.ix, C.iy, C.iz, C.leaf() ? 1 : 0});
+        ++q[at];
+        for (int k = 0; k < C.n_children; ++k) stack.push_back(C.first_child + k);
+      }
+    }
+  {
+    const double t0 = omp_get_wtime();
+    comm.alltoallv(req, got);
+    dd.t_comm += omp_get_wtime() - t0;
+  }
+  // fragments: per asking rank, [f, fragment] for each cell it asked for
+  std::vector<std::vector<double>> send(nranks), recv;
+  for (int r = 0; r < nranks; ++r) {
+    const std::vector<int> &g = got[r];
+    for (std::size_t k = 0; k < g.size();) {
+      const int f = g[k], count = g[k + 1];
+      k += 2;
+      std::vector<AskingCell> asking(count);
+      for (int j = 0; j < count; ++j, k += 5) {
+        Cell &c = asking[j].cell;
+        c.level = g[k];
+        c.ix = g[k + 1];
+        c.iy = g[k + 2];
+        c.iz = g[k + 3];
+        asking[j].leaf = g[k + 4] == 1;
+        asking[j].coarse = g[k + 4] == 2;
+      }
+      // the asking rank's own cells inside F: those of its points this rank imported
+      const int cf = local_of[dd.frontier[f]];
+      const std::size_t from_b = dd.n_own + dd.ghost_from[r], from_e = dd.n_own + dd.ghost_from[r + 1];
+      if (from_e > from_b) {
+        std::vector<int> stack{cf};
+        while (!stack.empty()) {
+          const Cell &C = cells[stack.back()];
+          stack.pop_back();
+          bool holds = false;
+          for (uint32_t i = C.trg_begin; i < C.trg_end && !holds; ++i)
+            holds = tree.trg_order[i] >= from_b && tree.trg_order[i] < from_e;
+          if (!holds) continue;
+          asking.push_back({C, C.leaf(), false});
+          for (int c2 = 0; c2 < C.n_children; ++c2) stack.push_back(C.first_child + c2);
+        }
+      }
+      send[r].push_back((double) f);
+      const std::size_t at = send[r].size();
+      let_fragment(tree, cf, asking, shifts, up, nsurf, dd, from_b, from_e, send[r]);
+      dd.ghost_bytes += sizeof(double) * 4 * (std::size_t) send[r][at + 1];
+    }
+    dd.let_bytes += sizeof(double) * send[r].size();
+  }
+  {
+    const double t0 = omp_get_wtime();
+    comm.alltoallv(send, recv);
+    dd.t_comm += omp_get_wtime() - t0;
+  }
+  // append the received cells below their frontier cells, their densities and points
+  for (const auto &v : recv) {
+    std::size_t k = 0;
+    while (k < v.size()) {
+      const int f = (int) v[k], ncells = (int) v[k + 1];
+      const std::size_t npts = (std::size_t) v[k + 2];
+      k += 3;
+      const int base = (int) top.cells.size(), cf = dd.frontier[f];
+      const double *desc = &v[k];
+      k += 6 * (std::size_t) ncells;
+      for (int j = 0; j < ncells; ++j) {
+        const double *e = desc + 6 * j;
+        const int par = e[0] < 0 ? cf : base + (int) e[0], oct = (int) e[1];
+        const Cell P = top.cells[par];
+        Cell ch;
+        ch.level = P.level + 1;
+        ch.parent = par;
+        ch.prefix = (P.prefix << 3) | (uint64_t) oct;
+        ch.ix = 2 * P.ix + (oct & 1);
+        ch.iy = 2 * P.iy + ((oct >> 1) & 1);
+        ch.iz = 2 * P.iz + ((oct >> 2) & 1);
+        ch.gsrc = (uint32_t) e[2];
+        ch.gtrg = (uint32_t) e[3];
+        const int idx = (int) top.cells.size();
+        if (top.cells[par].n_children == 0) top.cells[par].first_child = idx;
+        ++top.cells[par].n_children;
+        top.cells[par].child[oct] = idx;
+        top.cells.push_back(ch);
+        top.open.push_back(e[4] == 2.0);
+        dd.let_has_density.push_back(e[5] != 0.0);
+        dd.let_density.resize(dd.let_density.size() + nsurf, 0.0);
+      }
+      for (int j = 0; j < ncells; ++j)
+        if (desc[6 * j + 5] != 0.0) {
+          std::copy(&v[k], &v[k] + nsurf, &dd.let_density[(std::size_t) (base - ntop + j) * nsurf]);
+          k += nsurf;
+        }
+      for (std::size_t i = 0; i < npts; ++i, k += 4) {
+        dd.xyz.insert(dd.xyz.end(), {v[k], v[k + 1], v[k + 2]});
+        dd.q.push_back(v[k + 3]);
+      }
+      dd.let_cells += ncells;
+    }
+  }
 }
 
 }    // namespace kifmm

@@ -14,13 +14,25 @@ namespace kifmm {
 
 struct DistributedData {
   RootBox root;
+  // the global top tree (cells [0, n_top_global)); exchange_let appends the cells of the
+  // locally essential trees this rank received below open frontier cells (LET cells)
   TopTree top;
+  int n_top_global = 0;
+  std::vector<char> top_internal;    // global top cells with children in the global top tree
   uint64_t global_points = 0, global_sources = 0;
   std::vector<double> xyz, q;        // this rank's points (first n_own, input order), then ghosts
   std::size_t n_own = 0;
   std::vector<int> frontier;         // top cells without children in the top tree
+  std::vector<int> frontier_index;   // per global top cell: its index in frontier, or -1
   std::vector<char> responsible;     // per frontier cell: this rank computes its density
-  std::size_t ghost_bytes = 0;       // bytes of ghost points this rank sent
+  std::vector<char> complete;        // per frontier cell: all its points are here (own + imported)
+  std::vector<std::vector<int>> let_from;    // per rank: frontier cells whose LET this rank needs from it
+  std::vector<std::size_t> ghost_from;       // ghosts from rank r: points [n_own + ghost_from[r], n_own + ghost_from[r+1])
+  std::vector<double> let_density;   // nsurf per LET cell (top cell n_top_global + k)
+  std::vector<char> let_has_density;
+  std::size_t ghost_bytes = 0;       // bytes of ghost points this rank sent (whole cells and LET)
+  std::size_t let_bytes = 0;         // bytes of LET fragments this rank sent (cells, densities, points)
+  std::size_t let_cells = 0;         // LET cells this rank received
   double t_comm = 0;                 // time inside communication calls
 };
 
@@ -45,6 +57,28 @@ int choose_top_level(uint64_t npoints, int nranks, int nsurf, int max_depth, int
 void distributed_setup(Communicator &comm, int top_level, int leaf_size, int max_depth, int nsurf, bool pow2_root,
                        const RootBox *fixed_root, bool periodic, std::size_t n, const double *xyz, const double *q,
                        DistributedData &out);
+
+// Locally essential trees (after distributed_setup, collective). tree: this rank's tree over
+// its own (the first n_own input points) and imported points, built with dd.top, complete
+// below the frontier cells marked dd.complete; up: upward densities (nsurf per cell of tree) of
+// every cell below those frontier cells. A rank asks the responsible rank of each open frontier
+// cell F in dd.let_from for its LET, sending the cells of its tree that hold its own points and
+// touch F (level, position, leaf or not; a frontier cell that is not complete here stands for
+// the unknown cells of its own points inside it, and F itself for none: the responsible rank,
+// which imported this rank's points of F, finds its cells there). The responsible rank answers
+// with the part of F's subtree that the lists of those cells reach (none of the asking rank's
+// own points):
+//   cells: the children of every cell P that touches an asking cell of P's level that splits,
+//          or an asking leaf of P's level or coarser (colleagues and V lists, the descent of
+//          U/W lists), with their global counts and densities (or, for a cell of fewer than
+//          nsurf / 4 points, its points, which take fewer bytes);
+//   points: of the leaves that touch an asking leaf or an asking cell of their level or finer
+//          (U, X lists), and of the subtrees of at most nsurf sources whose parent touches a
+//          coarser asking leaf (W lists, evaluated directly).
+// Received fragments are appended to dd: cells to dd.top (top.open: split in the global tree,
+// children not sent), densities to dd.let_density, points to dd.xyz / dd.q.
+void exchange_let(Communicator &comm, const Octree &tree, std::size_t n_own, const std::vector<double> &up, int nsurf,
+                  bool periodic, DistributedData &dd);
 
 // Keep only the targets with input index < n_keep in the sorted target order (ranges remapped;
 // gtrg keeps the counts the tree was split with).

@@ -35,7 +35,6 @@ void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, co
   distributed_setup(comm, opt_.top_level, opt_.leaf_size, opt_.max_depth, nsurf_, !level_independent_operators<K>(),
                     opt_.fixed_root ? &fixed : nullptr, opt_.periodic, n, xyz, q, dd);
   stats_.t_comm = dd.t_comm;
-  stats_.ghost_bytes = dd.ghost_bytes;
   stats_.top_level = dd.top.top_level;
   stats_.n_sources = dd.global_sources;
   auto finish = [&] { stats_.comm_bytes = comm.bytes_sent(); };
@@ -43,76 +42,144 @@ void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, co
     finish();
     return;
   }
+  // 1. this rank's tree over its own and the whole imported points (complete below every
+  // frontier cell it holds points of) and the upward densities of every cell there: for the
+  // frontier densities this rank is responsible for and for the LETs other ranks asked for
+  const double ta = omp_get_wtime();    // setup done (its communication: dd.t_comm)
+  std::vector<double> kxyz, kq;
+  {
+    const std::size_t nl = dd.q.size();
+    const double *sxyz = dd.xyz.data(), *sq = dd.q.data();
+    const std::size_t ns = nonzero_sources(nl, sxyz, sq, kxyz, kq);
+    build_octree(tree_, dd.root, ns, sxyz, nl, dd.xyz.data(), opt_.leaf_size, opt_.max_depth, &dd.top);
+    sorted_copies(ns, sxyz, sq, 0, nullptr);
+  }
+  const double tb = omp_get_wtime();
+  tree_stats_and_operators();
+  const double precompute1 = stats_.t_precompute;
+  const std::size_t nc2 = tree_.cells.size();
+  up_equiv_.assign(nc2 * nsurf_, 0.0);
+  up_mask_.assign(nc2, 0);    // (cells are level-ordered: a parent before its children)
+  for (std::size_t c = 0; c < nc2; ++c) {
+    const int t = tree_.top_index[c];
+    up_mask_[c] = t >= 0 ? dd.frontier_index[t] >= 0 && dd.complete[dd.frontier_index[t]] : up_mask_[tree_.cells[c].parent];
+  }
+  const double t1 = omp_get_wtime();
+  upward(tree_.depth, first_level(), false);
+  // densities of the frontier cells: from the responsible rank (which holds the whole cell),
+  // one sum over ranks
+  std::vector<int> slots;    // frontier cells (top indices) with densities
+  {
+    std::vector<int> local2(dd.n_top_global, -1);
+    for (std::size_t c = 0; c < nc2; ++c)
+      if (tree_.top_index[c] >= 0) local2[tree_.top_index[c]] = (int) c;
+    std::vector<char> mine;
+    for (std::size_t f = 0; f < dd.frontier.size(); ++f) {
+      const int c = local2[dd.frontier[f]];
+      if (tree_.cells[c].level >= first_level() && tree_.cells[c].gsrc > 0) {
+        slots.push_back(dd.frontier[f]);
+        mine.push_back(dd.responsible[f]);
+      }
+    }
+    frontier_buf_.assign(slots.size() * (std::size_t) nsurf_, 0.0);
+    for (std::size_t k = 0; k < slots.size(); ++k)
+      if (mine[k]) std::copy(up(local2[slots[k]]), up(local2[slots[k]]) + nsurf_, &frontier_buf_[k * nsurf_]);
+  }
+  const double tc = omp_get_wtime();
+  comm.allreduce_sum(frontier_buf_.data(), frontier_buf_.size());
+  double t_reduce = omp_get_wtime() - tc;
+  // 2. locally essential trees: sent for the open frontier cells other ranks asked for,
+  // received below the ones this rank asked for (cells, densities, points)
+  const double tl = omp_get_wtime();
+  const double comm_before_let = dd.t_comm;
+  exchange_let(comm, tree_, n, up_equiv_, nsurf_, opt_.periodic, dd);
+  const double tm = omp_get_wtime();
+  // times: tree = setup and fragments (less their communication) + both tree builds
+  const double t_up1 = tl - t1 - t_reduce;
+  stats_.t_comm = dd.t_comm + t_reduce;
+  double t_tree = (ta - t - comm_before_let) + (tb - ta) + (tm - tl - (dd.t_comm - comm_before_let));
+  stats_.ghost_bytes = dd.ghost_bytes;
+  stats_.let_bytes = dd.let_bytes;
+  stats_.let_cells = dd.let_cells;
+  Octree tree1 = std::move(tree_);
+  std::vector<double> up1 = std::move(up_equiv_);
+  std::vector<char> have1 = std::move(up_mask_);
+  // 3. the tree of the evaluation: own, whole imported and LET points below the global top tree
+  // extended by the LET cells
   const std::size_t nl = dd.q.size();
   stats_.n_ghosts = nl - n;
-  // local sources: points of nonzero strength; local targets: all points (the ghosts count
-  // for the split rule, then keep_targets drops them)
-  std::vector<double> kxyz, kq;
+  const double t2a = omp_get_wtime();
+  kxyz.clear();
+  kq.clear();
   const double *sxyz = dd.xyz.data(), *sq = dd.q.data();
   const std::size_t ns = nonzero_sources(nl, sxyz, sq, kxyz, kq);
   build_octree(tree_, dd.root, ns, sxyz, nl, dd.xyz.data(), opt_.leaf_size, opt_.max_depth, &dd.top);
   keep_targets(tree_, n);
   sorted_copies(ns, sxyz, sq, n, xyz);
-  const double t1 = omp_get_wtime();
-  stats_.t_tree = t1 - t - dd.t_comm;
+  const double t2b = omp_get_wtime();
+  stats_.t_tree = t_tree + (t2b - t2a);
   if (opt_.periodic) build_periodic_interaction_lists(tree_, lists_, plists_);
   else build_interaction_lists(tree_, lists_);
   const double t2 = omp_get_wtime();
-  stats_.t_lists = t2 - t1;
+  stats_.t_lists = t2 - t2b;
   tree_stats_and_operators();
+  stats_.t_precompute += precompute1;
   const double t3 = omp_get_wtime();
   reset_accumulators(n);
   const std::size_t nc = tree_.cells.size();
-  // upward densities only where they are used: cells below the top tree that appear in a V or
-  // W list of an own cell (and their subtrees, for M2M), and the frontier cells this rank is
-  // responsible for; the top cells get theirs from the reduction below (no P2M of ghost-only
-  // subtrees that no list uses)
-  // local index of every top cell
-  std::vector<int> local_of(dd.top.cells.size(), -1);
-  for (std::size_t c = 0; c < nc; ++c)
-    if (tree_.top_index[c] >= 0) local_of[tree_.top_index[c]] = (int) c;
+  // densities: cells of the first tree (same position, same points) copied, LET cells from
+  // the fragments, frontier cells from the reduction; what a V or W list of an own cell still
+  // needs (below LET cells, from points received whole) is computed here
+  std::vector<char> has(nc, 0);
   {
-    up_mask_.assign(nc, 0);
-    for (const CellList *lst : {&lists_.V, &lists_.W})
-      for (int a : lst->idx)
-        if (tree_.top_index[a] < 0) up_mask_[a] = 1;
-    for (int a : plists_.W.idx)    // periodic W entries with an image shift (else empty)
-      if (opt_.periodic && tree_.top_index[a] < 0) up_mask_[a] = 1;
-    for (std::size_t f = 0; f < dd.frontier.size(); ++f)
-      if (dd.responsible[f]) up_mask_[local_of[dd.frontier[f]]] = 1;
-    for (std::size_t c = 1; c < nc; ++c)
-      if (tree_.top_index[c] < 0 && up_mask_[tree_.cells[c].parent]) up_mask_[c] = 1;
-  }
-  upward(tree_.depth, first_level(), false);
-  // densities of the frontier cells: from the responsible rank (which holds the whole cell),
-  // one sum over ranks; then M2M over the top levels on every rank
-  std::vector<int> slots;    // local indices of the frontier cells with densities
-  std::vector<char> mine;
-  for (std::size_t f = 0; f < dd.frontier.size(); ++f) {
-    const int c = local_of[dd.frontier[f]];
-    if (tree_.cells[c].level >= first_level() && tree_.cells[c].gsrc > 0) {
-      slots.push_back(c);
-      mine.push_back(dd.responsible[f]);
+    std::vector<int> in1(nc, -1);
+    in1[0] = 0;
+    for (std::size_t c = 1; c < nc; ++c) {
+      const int p1 = in1[tree_.cells[c].parent];
+      if (p1 >= 0) in1[c] = tree1.cells[p1].child[tree_.cells[c].prefix & 7];
+    }
+    for (std::size_t c = 0; c < nc; ++c) {
+      const int t = tree_.top_index[c];
+      if (t >= dd.n_top_global) {
+        const std::size_t k = (std::size_t) (t - dd.n_top_global);
+        if (dd.let_has_density[k]) {
+          std::copy(&dd.let_density[k * nsurf_], &dd.let_density[(k + 1) * nsurf_], up((int) c));
+          has[c] = 1;
+        }
+      } else if (in1[c] >= 0 && have1[in1[c]] && tree_.cells[c].gsrc > 0) {
+        std::copy(&up1[(std::size_t) in1[c] * nsurf_], &up1[(std::size_t) (in1[c] + 1) * nsurf_], up((int) c));
+        has[c] = 1;
+      }
+    }
+    std::vector<int> local_of(dd.n_top_global, -1);
+    for (std::size_t c = 0; c < nc; ++c)
+      if (tree_.top_index[c] >= 0 && tree_.top_index[c] < dd.n_top_global) local_of[tree_.top_index[c]] = (int) c;
+    for (std::size_t k = 0; k < slots.size(); ++k) {
+      const int c = local_of[slots[k]];
+      std::copy(&frontier_buf_[k * nsurf_], &frontier_buf_[(k + 1) * nsurf_], up(c));
+      has[c] = 1;
     }
   }
-  std::vector<double> buf(slots.size() * (std::size_t) nsurf_, 0.0);
-  for (std::size_t k = 0; k < slots.size(); ++k)
-    if (mine[k]) std::copy(up(slots[k]), up(slots[k]) + nsurf_, &buf[k * nsurf_]);
-  const double tc = omp_get_wtime();
-  comm.allreduce_sum(buf.data(), buf.size());
-  const double t_reduce = omp_get_wtime() - tc;
-  stats_.t_comm += t_reduce;
-  for (std::size_t k = 0; k < slots.size(); ++k)
-    std::copy(&buf[k * nsurf_], &buf[(k + 1) * nsurf_], up(slots[k]));
-  // M2M over the top cells with children (the same on every rank)
+  // (cells below the global top tree: built from all their points here)
+  auto below_top = [&](int c) { return tree_.top_index[c] < 0 || tree_.top_index[c] >= dd.n_top_global; };
+  up_mask_.assign(nc, 0);
+  for (const CellList *lst : {&lists_.V, &lists_.W})
+    for (int a : lst->idx)
+      if (below_top(a) && !has[a]) up_mask_[a] = 1;
+  for (int a : plists_.W.idx)    // periodic W entries with an image shift (else empty)
+    if (opt_.periodic && below_top(a) && !has[a]) up_mask_[a] = 1;
+  for (std::size_t c = 1; c < nc; ++c)
+    if (below_top((int) c) && !has[c] && up_mask_[tree_.cells[c].parent]) up_mask_[c] = 1;
+  upward(tree_.depth, first_level(), false);
+  // M2M over the global top cells with children (the same on every rank)
   for (std::size_t c = 0; c < nc; ++c) {
     const int t = tree_.top_index[c];
-    up_mask_[c] = t >= 0 && dd.top.cells[t].n_children > 0;
+    up_mask_[c] = t >= 0 && t < dd.n_top_global && dd.top_internal[t];
   }
   upward(dd.top.top_level - 1, first_level(), true);
   up_mask_.clear();
   const double t4 = omp_get_wtime();
-  stats_.t_upward = t4 - t3 - t_reduce;
+  stats_.t_upward = t4 - t3 + t_up1;
   m2l();
   const double t5 = omp_get_wtime();
   stats_.t_m2l = t5 - t4;
@@ -140,7 +207,8 @@ void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, co
   if (stats_.coincident_pairs >= self) stats_.coincident_pairs -= self;
   stats_.tree_bytes = tree_.bytes() + lists_.bytes() +
       sizeof(double) * (up_equiv_.size() + dn_check_.size() + dn_equiv_.size() + xhat_.capacity() + yhat_.capacity() +
-                        sx_.size() * 4 + tx_.size() * 7 + dd.xyz.capacity() + dd.q.capacity());
+                        sx_.size() * 4 + tx_.size() * 7 + dd.xyz.capacity() + dd.q.capacity() +
+                        dd.let_density.capacity() + frontier_buf_.capacity());
   finish();
 }
 

@@ -97,6 +97,7 @@ template <class K> class FmmEvaluator : public Evaluator {
   std::vector<double> up_equiv_, dn_check_, dn_equiv_, xhat_, yhat_;
   std::vector<char> has_local_;
   std::vector<char> up_mask_;    // distributed: cells whose upward density is computed (empty = all)
+  std::vector<double> frontier_buf_;    // distributed: densities of the frontier cells (reduced)
 
   double *up(int c) { return &up_equiv_[(std::size_t) c * nsurf_]; }
   double *dcheck(int c) { return &dn_check_[(std::size_t) c * nsurf_]; }

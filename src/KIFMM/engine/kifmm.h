@@ -57,9 +57,10 @@ struct Stats {
   std::size_t operator_bytes = 0;     // memory of precomputed operators
   std::size_t tree_bytes = 0;         // memory of tree + expansions in this evaluation
   // distributed evaluation (evaluate_distributed): time in communication calls, bytes this
-  // rank sent (of which ghost points), ghost points received, level of the top tree
+  // rank sent (of which ghost points, and of which locally essential tree fragments: cells,
+  // densities and their points), ghost points received, LET cells received, level of the top tree
   double t_comm = 0;
-  std::size_t comm_bytes = 0, ghost_bytes = 0, n_ghosts = 0;
+  std::size_t comm_bytes = 0, ghost_bytes = 0, let_bytes = 0, n_ghosts = 0, let_cells = 0;
   int top_level = 0;
 };
 
@@ -78,7 +79,7 @@ class Evaluator {
   // (all are targets; those with q != 0 are sources) and gets pot/grad of its own points,
   // equal to evaluate() on the union of all ranks' points up to round-off. Memory per rank:
   // its points, ghost points near them, and a top tree that does not grow with N.
-  // Open boundaries only (throws std::invalid_argument with periodic options).
+  // Open or periodic boundaries (periodic: the fixed root is the cell).
   virtual void evaluate_distributed(Communicator &comm, std::size_t n, const double *xyz, const double *q,
                                     double *pot, double *grad) = 0;
 

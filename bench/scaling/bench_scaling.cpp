@@ -123,7 +123,7 @@ int main(int argc, char **argv)
   const kifmm::Stats &s = ev.stats();
   double mx[10], sum[10], mn[10];
   double v[10] = {wall / reps, cpu / reps, (double) s.comm_bytes, (double) s.n_ghosts, (double) n,
-                  (double) s.ghost_bytes, 0, 0, 0, 0};
+                  (double) s.ghost_bytes, (double) s.let_bytes, (double) s.let_cells, 0, 0};
   MPI_Allreduce(v, mx, 10, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
   MPI_Allreduce(v, sum, 10, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
   MPI_Allreduce(v, mn, 10, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
@@ -137,12 +137,13 @@ int main(int argc, char **argv)
   if (me == 0) {
     printf("{\"N\": %zu, \"dist\": \"%s\", \"order\": %d, \"ranks\": %d, \"threads\": %d, \"top_level\": %d, "
            "\"wall\": %.6g, \"cpu_sum\": %.6g, \"bytes_min\": %.0f, \"bytes_avg\": %.0f, \"bytes_max\": %.0f, "
-           "\"ghost_bytes_max\": %.0f, \"ghosts_min\": %.0f, \"ghosts_avg\": %.1f, \"ghosts_max\": %.0f, "
+           "\"ghost_bytes_max\": %.0f, \"let_bytes_max\": %.0f, \"let_cells_avg\": %.1f, "
+           "\"ghosts_min\": %.0f, \"ghosts_avg\": %.1f, \"ghosts_max\": %.0f, "
            "\"own_min\": %.0f, \"own_max\": %.0f, \"depth\": %d, "
            "\"phase_max\": {\"tree\": %.4g, \"lists\": %.4g, \"upward\": %.4g, \"m2l\": %.4g, \"wx\": %.4g, "
            "\"downward\": %.4g, \"p2p\": %.4g, \"comm\": %.4g}, \"loadavg\": %.2f}\n",
            N, dist.c_str(), order, P, omp_get_max_threads(), s.top_level, mx[0], sum[1], mn[2], sum[2] / P, mx[2],
-           mx[5], mn[3], sum[3] / P, mx[3], mn[4], mx[4], s.depth, phmax[0] / reps, phmax[1] / reps,
+           mx[5], mx[6], sum[7] / P, mn[3], sum[3] / P, mx[3], mn[4], mx[4], s.depth, phmax[0] / reps, phmax[1] / reps,
            phmax[2] / reps, phmax[3] / reps, phmax[4] / reps, phmax[5] / reps, phmax[6] / reps, phmax[7] / reps,
            load[0]);
     fflush(stdout);

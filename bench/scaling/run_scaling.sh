@@ -3,7 +3,10 @@
 #   bash bench/scaling/run_scaling.sh [build dir] [max N]
 # 1 and 2 ranks x 1 and 2 threads at N = 1e5 and 1e6 (uniform, order 6, 3 timed evaluations
 # after a warm-up), then bytes sent per rank for P = 1..8 (oversubscribed: only the bytes and
-# ghost counts mean something there, not the times), also with periodic boundaries. Appends JSON lines to
+# ghost counts mean something there, not the times), also with periodic boundaries, and the
+# locally essential trees below coarse frontier cells (top level forced to 2 and 3: frontier
+# cells much larger than leaves; KIFMM_BASE_BUILD=dir also runs a build of another commit
+# there, e.g. the whole-cell import before the LET). Appends JSON lines to
 # bench/scaling/results/scaling.jsonl (one per run, with the load average).
 set -e
 cd "$(dirname "$0")/../.."
@@ -16,10 +19,22 @@ run() {
   local np=$1 th=$2 tag=$3
   shift 3
   OMP_NUM_THREADS=$th nice -n 10 mpirun --bind-to none --oversubscribe -np "$np" -x OMP_NUM_THREADS \
-    "$B/bench/scaling/bench_scaling" "$@" | sed "s/}\$/, \"tag\": \"$tag\"}/" | tee -a "$OUT"
+    "${BIN:-$B}/bench/scaling/bench_scaling" "$@" | sed "s/}\$/, \"tag\": \"$tag\"}/" | tee -a "$OUT"
 }
 Ns="1e5"
 [ "$NMAX" = "1e6" ] && Ns="1e5 1e6"
+if [ "${KIFMM_SCALING_ONLY:-}" = "let" ]; then
+  commit=$(git rev-parse --short HEAD)
+  for N in $Ns; do
+    for np in 2 3 4 8; do
+      for top in 2 3 0; do
+        run "$np" 1 "let-$commit" "$N" uniform 6 1 "$top"
+        [ -n "${KIFMM_BASE_BUILD:-}" ] && BIN="$KIFMM_BASE_BUILD" run "$np" 1 "whole-cells-${KIFMM_BASE_TAG:-base}" "$N" uniform 6 1 "$top"
+      done
+    done
+  done
+  exit 0
+fi
 for N in $Ns; do
   for np in 1 2; do
     for th in 1 2; do run "$np" "$th" strong "$N" uniform 6 3; done

@@ -263,8 +263,8 @@ void distributed_setup(Communicator &comm, int top_level, int leaf_size, int max
   }
   out.responsible.assign(nf, 0);
   for (int f = 0; f < nf; ++f) out.responsible[f] = ostart[f + 1] > ostart[f] && occ[ostart[f]] == me;
-  std::vector<char> occupied(nf, 0);
-  for (int f : mine) occupied[f] = 1;
+  out.occupied.assign(nf, 0);
+  for (int f : mine) out.occupied[f] = 1;
 
   // frontier cells whose points this rank needs (doc/design.md: rules i-iii); periodic: the
   // neighbours through the cell's faces too (images). How: kWhole, all points from every rank
@@ -328,10 +328,14 @@ void distributed_setup(Communicator &comm, int top_level, int leaf_size, int max
         if (occ[k] != me) req[occ[k]].push_back(f);
     if (need[f] == kLet && ostart[f + 1] > ostart[f]) out.let_from[occ[ostart[f]]].push_back(f);
   }
+  uint64_t lets = 0;    // LETs this rank needs; summed: whether exchange_let runs at all
+  for (const auto &v : out.let_from) lets += v.size();
   {
     Timer t(out.t_comm);
     comm.alltoallv(req, got);
+    comm.allreduce_sum(&lets, 1);
   }
+  out.any_let = lets > 0;
   std::vector<std::vector<double>> send(nranks), recv;
   for (int r = 0; r < nranks; ++r)
     for (int f : got[r]) {

@@ -25,7 +25,9 @@ struct DistributedData {
   std::vector<int> frontier;         // top cells without children in the top tree
   std::vector<int> frontier_index;   // per global top cell: its index in frontier, or -1
   std::vector<char> responsible;     // per frontier cell: this rank computes its density
+  std::vector<char> occupied;        // per frontier cell: this rank holds own points there
   std::vector<char> complete;        // per frontier cell: all its points are here (own + imported)
+  bool any_let = false;              // some rank needs a LET (exchange_let must be called)
   std::vector<std::vector<int>> let_from;    // per rank: frontier cells whose LET this rank needs from it
   std::vector<std::size_t> ghost_from;       // ghosts from rank r: points [n_own + ghost_from[r], n_own + ghost_from[r+1])
   std::vector<double> let_density;   // nsurf per LET cell (top cell n_top_global + k)

@@ -42,75 +42,81 @@ void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, co
     finish();
     return;
   }
-  // 1. this rank's tree over its own and the whole imported points (complete below every
-  // frontier cell it holds points of) and the upward densities of every cell there: for the
-  // frontier densities this rank is responsible for and for the LETs other ranks asked for
+  // Densities of the frontier cells: the responsible rank (which holds the whole cell) puts
+  // its cells' into frontier_buf_, one sum over ranks (after the evaluation tree's upward pass).
+  std::vector<int> slots;    // frontier cells (top indices) with densities
+  std::vector<char> slot_mine;
+  for (std::size_t f = 0; f < dd.frontier.size(); ++f) {
+    const Cell &F = dd.top.cells[dd.frontier[f]];
+    if (F.level >= first_level() && F.gsrc > 0) {
+      slots.push_back(dd.frontier[f]);
+      slot_mine.push_back(dd.responsible[f]);
+    }
+  }
+  frontier_buf_.assign(slots.size() * (std::size_t) nsurf_, 0.0);
+  auto fill_frontier_buf = [&](const std::vector<int> &local) {
+    for (std::size_t k = 0; k < slots.size(); ++k)
+      if (slot_mine[k]) std::copy(up(local[slots[k]]), up(local[slots[k]]) + nsurf_, &frontier_buf_[k * nsurf_]);
+  };
+  auto local_of_top = [&]() {
+    std::vector<int> local(dd.n_top_global, -1);
+    for (std::size_t c = 0; c < tree_.cells.size(); ++c)
+      if (tree_.top_index[c] >= 0 && tree_.top_index[c] < dd.n_top_global) local[tree_.top_index[c]] = (int) c;
+    return local;
+  };
   const double ta = omp_get_wtime();    // setup done (its communication: dd.t_comm)
+  double t_tree = ta - t - dd.t_comm, t_up1 = 0, precompute1 = 0;
   std::vector<double> kxyz, kq;
-  {
+  Octree tree1;
+  std::vector<double> up1;
+  std::vector<char> have1;
+  if (dd.any_let) {
+    // 1. (some rank needs a LET) this rank's tree over its own and whole imported points,
+    // complete below the frontier cells marked complete, and the upward densities below the
+    // ones it holds points of: for the frontier densities it is responsible for, the LETs other
+    // ranks ask for, and its own lists (copied into the evaluation tree below)
     const std::size_t nl = dd.q.size();
     const double *sxyz = dd.xyz.data(), *sq = dd.q.data();
     const std::size_t ns = nonzero_sources(nl, sxyz, sq, kxyz, kq);
     build_octree(tree_, dd.root, ns, sxyz, nl, dd.xyz.data(), opt_.leaf_size, opt_.max_depth, &dd.top);
     sorted_copies(ns, sxyz, sq, 0, nullptr);
-  }
-  const double tb = omp_get_wtime();
-  tree_stats_and_operators();
-  const double precompute1 = stats_.t_precompute;
-  const std::size_t nc2 = tree_.cells.size();
-  up_equiv_.assign(nc2 * nsurf_, 0.0);
-  up_mask_.assign(nc2, 0);    // (cells are level-ordered: a parent before its children)
-  for (std::size_t c = 0; c < nc2; ++c) {
-    const int t = tree_.top_index[c];
-    up_mask_[c] = t >= 0 ? dd.frontier_index[t] >= 0 && dd.complete[dd.frontier_index[t]] : up_mask_[tree_.cells[c].parent];
-  }
-  const double t1 = omp_get_wtime();
-  upward(tree_.depth, first_level(), false);
-  // densities of the frontier cells: from the responsible rank (which holds the whole cell),
-  // one sum over ranks
-  std::vector<int> slots;    // frontier cells (top indices) with densities
-  {
-    std::vector<int> local2(dd.n_top_global, -1);
-    for (std::size_t c = 0; c < nc2; ++c)
-      if (tree_.top_index[c] >= 0) local2[tree_.top_index[c]] = (int) c;
-    std::vector<char> mine;
-    for (std::size_t f = 0; f < dd.frontier.size(); ++f) {
-      const int c = local2[dd.frontier[f]];
-      if (tree_.cells[c].level >= first_level() && tree_.cells[c].gsrc > 0) {
-        slots.push_back(dd.frontier[f]);
-        mine.push_back(dd.responsible[f]);
-      }
+    const double tb = omp_get_wtime();
+    t_tree += tb - ta;
+    tree_stats_and_operators();
+    precompute1 = stats_.t_precompute;
+    const std::size_t nc1 = tree_.cells.size();
+    up_equiv_.assign(nc1 * nsurf_, 0.0);
+    up_mask_.assign(nc1, 0);    // (cells are level-ordered: a parent before its children)
+    for (std::size_t c = 0; c < nc1; ++c) {
+      const int t = tree_.top_index[c];
+      if (t < 0) up_mask_[c] = up_mask_[tree_.cells[c].parent];
+      else if (dd.frontier_index[t] >= 0) up_mask_[c] = dd.complete[dd.frontier_index[t]] && dd.occupied[dd.frontier_index[t]];
     }
-    frontier_buf_.assign(slots.size() * (std::size_t) nsurf_, 0.0);
-    for (std::size_t k = 0; k < slots.size(); ++k)
-      if (mine[k]) std::copy(up(local2[slots[k]]), up(local2[slots[k]]) + nsurf_, &frontier_buf_[k * nsurf_]);
+    const double t1 = omp_get_wtime();
+    upward(tree_.depth, first_level(), false);
+    fill_frontier_buf(local_of_top());
+    // 2. locally essential trees: sent for the open frontier cells other ranks asked for,
+    // received below the ones this rank asked for (cells, densities, points)
+    const double tl = omp_get_wtime();
+    t_up1 = tl - t1;
+    const double comm_before_let = dd.t_comm;
+    exchange_let(comm, tree_, n, up_equiv_, nsurf_, opt_.periodic, dd);
+    t_tree += omp_get_wtime() - tl - (dd.t_comm - comm_before_let);    // fragments
+    tree1 = std::move(tree_);
+    up1 = std::move(up_equiv_);
+    have1 = std::move(up_mask_);
+    kxyz.clear();
+    kq.clear();
   }
-  const double tc = omp_get_wtime();
-  comm.allreduce_sum(frontier_buf_.data(), frontier_buf_.size());
-  double t_reduce = omp_get_wtime() - tc;
-  // 2. locally essential trees: sent for the open frontier cells other ranks asked for,
-  // received below the ones this rank asked for (cells, densities, points)
-  const double tl = omp_get_wtime();
-  const double comm_before_let = dd.t_comm;
-  exchange_let(comm, tree_, n, up_equiv_, nsurf_, opt_.periodic, dd);
-  const double tm = omp_get_wtime();
-  // times: tree = setup and fragments (less their communication) + both tree builds
-  const double t_up1 = tl - t1 - t_reduce;
-  stats_.t_comm = dd.t_comm + t_reduce;
-  double t_tree = (ta - t - comm_before_let) + (tb - ta) + (tm - tl - (dd.t_comm - comm_before_let));
+  stats_.t_comm = dd.t_comm;
   stats_.ghost_bytes = dd.ghost_bytes;
   stats_.let_bytes = dd.let_bytes;
   stats_.let_cells = dd.let_cells;
-  Octree tree1 = std::move(tree_);
-  std::vector<double> up1 = std::move(up_equiv_);
-  std::vector<char> have1 = std::move(up_mask_);
   // 3. the tree of the evaluation: own, whole imported and LET points below the global top tree
   // extended by the LET cells
   const std::size_t nl = dd.q.size();
   stats_.n_ghosts = nl - n;
   const double t2a = omp_get_wtime();
-  kxyz.clear();
-  kq.clear();
   const double *sxyz = dd.xyz.data(), *sq = dd.q.data();
   const std::size_t ns = nonzero_sources(nl, sxyz, sq, kxyz, kq);
   build_octree(tree_, dd.root, ns, sxyz, nl, dd.xyz.data(), opt_.leaf_size, opt_.max_depth, &dd.top);
@@ -127,11 +133,13 @@ void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, co
   const double t3 = omp_get_wtime();
   reset_accumulators(n);
   const std::size_t nc = tree_.cells.size();
-  // densities: cells of the first tree (same position, same points) copied, LET cells from
-  // the fragments, frontier cells from the reduction; what a V or W list of an own cell still
-  // needs (below LET cells, from points received whole) is computed here
+  const std::vector<int> local = local_of_top();
+  // densities: with LETs, cells of the first tree (same position, same points) copied and LET
+  // cells from the fragments; what a V or W list of an own cell still needs (cells below the
+  // top tree without a density, with their subtrees) and, without LETs, the frontier cells
+  // this rank is responsible for are computed here
   std::vector<char> has(nc, 0);
-  {
+  if (dd.any_let) {
     std::vector<int> in1(nc, -1);
     in1[0] = 0;
     for (std::size_t c = 1; c < nc; ++c) {
@@ -151,14 +159,6 @@ void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, co
         has[c] = 1;
       }
     }
-    std::vector<int> local_of(dd.n_top_global, -1);
-    for (std::size_t c = 0; c < nc; ++c)
-      if (tree_.top_index[c] >= 0 && tree_.top_index[c] < dd.n_top_global) local_of[tree_.top_index[c]] = (int) c;
-    for (std::size_t k = 0; k < slots.size(); ++k) {
-      const int c = local_of[slots[k]];
-      std::copy(&frontier_buf_[k * nsurf_], &frontier_buf_[(k + 1) * nsurf_], up(c));
-      has[c] = 1;
-    }
   }
   // (cells below the global top tree: built from all their points here)
   auto below_top = [&](int c) { return tree_.top_index[c] < 0 || tree_.top_index[c] >= dd.n_top_global; };
@@ -168,9 +168,19 @@ void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, co
       if (below_top(a) && !has[a]) up_mask_[a] = 1;
   for (int a : plists_.W.idx)    // periodic W entries with an image shift (else empty)
     if (opt_.periodic && below_top(a) && !has[a]) up_mask_[a] = 1;
+  if (!dd.any_let)
+    for (std::size_t k = 0; k < slots.size(); ++k)
+      if (slot_mine[k]) up_mask_[local[slots[k]]] = 1;
   for (std::size_t c = 1; c < nc; ++c)
     if (below_top((int) c) && !has[c] && up_mask_[tree_.cells[c].parent]) up_mask_[c] = 1;
   upward(tree_.depth, first_level(), false);
+  if (!dd.any_let) fill_frontier_buf(local);
+  const double tc = omp_get_wtime();
+  comm.allreduce_sum(frontier_buf_.data(), frontier_buf_.size());
+  const double t_reduce = omp_get_wtime() - tc;
+  stats_.t_comm += t_reduce;
+  for (std::size_t k = 0; k < slots.size(); ++k)
+    std::copy(&frontier_buf_[k * nsurf_], &frontier_buf_[(k + 1) * nsurf_], up(local[slots[k]]));
   // M2M over the global top cells with children (the same on every rank)
   for (std::size_t c = 0; c < nc; ++c) {
     const int t = tree_.top_index[c];
@@ -179,7 +189,7 @@ void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, co
   upward(dd.top.top_level - 1, first_level(), true);
   up_mask_.clear();
   const double t4 = omp_get_wtime();
-  stats_.t_upward = t4 - t3 + t_up1;
+  stats_.t_upward = t4 - t3 - t_reduce + t_up1;
   m2l();
   const double t5 = omp_get_wtime();
   stats_.t_m2l = t5 - t4;

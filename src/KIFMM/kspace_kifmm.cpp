@@ -594,18 +594,19 @@ void KSpaceKIFMM::report_first_evaluation()
                    s.t_precompute, s.operator_bytes / 1048576.0, s.tree_bytes / 1048576.0);
   if (distributed()) {
     // load and halo of the distributed evaluation, min/avg/max over ranks
-    double mine[3] = {(double) index.size(), (double) s.n_ghosts, (double) s.comm_bytes};
-    double lo[3], hi[3], sum[3];
-    MPI_Allreduce(mine, lo, 3, MPI_DOUBLE, MPI_MIN, world);
-    MPI_Allreduce(mine, hi, 3, MPI_DOUBLE, MPI_MAX, world);
-    MPI_Allreduce(mine, sum, 3, MPI_DOUBLE, MPI_SUM, world);
+    double mine[4] = {(double) index.size(), (double) s.n_ghosts, (double) s.comm_bytes, (double) s.let_cells};
+    double lo[4], hi[4], sum[4];
+    MPI_Allreduce(mine, lo, 4, MPI_DOUBLE, MPI_MIN, world);
+    MPI_Allreduce(mine, hi, 4, MPI_DOUBLE, MPI_MAX, world);
+    MPI_Allreduce(mine, sum, 4, MPI_DOUBLE, MPI_SUM, world);
     const int np = comm->nprocs;
     if (comm->me == 0)
       utils::logmesg(lmp,
                      "  KIFMM ranks (min/avg/max): atoms {:.0f}/{:.1f}/{:.0f}, ghost atoms "
-                     "{:.0f}/{:.1f}/{:.0f}, bytes sent {:.0f}/{:.0f}/{:.0f}; top tree level {}\n",
-                     lo[0], sum[0] / np, hi[0], lo[1], sum[1] / np, hi[1], lo[2], sum[2] / np, hi[2],
-                     s.top_level);
+                     "{:.0f}/{:.1f}/{:.0f}, locally essential tree cells {:.0f}/{:.1f}/{:.0f}, bytes "
+                     "sent {:.0f}/{:.0f}/{:.0f}; top tree level {}\n",
+                     lo[0], sum[0] / np, hi[0], lo[1], sum[1] / np, hi[1], lo[3], sum[3] / np, hi[3], lo[2],
+                     sum[2] / np, hi[2], s.top_level);
   }
 }
 

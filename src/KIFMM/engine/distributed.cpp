@@ -191,14 +191,7 @@ void distributed_setup(Communicator &comm, int top_level, int leaf_size, int max
       for (int oct = 0; oct < 8; ++oct) {
         const uint64_t s = counts[16 * k + oct], t = counts[16 * k + 8 + oct];
         if (s + t == 0) continue;
-        const Cell P = top.cells[c];
-        Cell ch;
-        ch.level = P.level + 1;
-        ch.parent = c;
-        ch.prefix = (P.prefix << 3) | (uint64_t) oct;
-        ch.ix = 2 * P.ix + (oct & 1);
-        ch.iy = 2 * P.iy + ((oct >> 1) & 1);
-        ch.iz = 2 * P.iz + ((oct >> 2) & 1);
+        Cell ch = child_cell(top.cells[c], c, oct);
         ch.gsrc = (uint32_t) s;
         ch.gtrg = (uint32_t) t;
         top.cells[c].child[oct] = (int) top.cells.size();
@@ -579,14 +572,7 @@ void exchange_let(Communicator &comm, const Octree &tree, std::size_t n_own, con
       for (int j = 0; j < ncells; ++j) {
         const double *e = desc + 6 * j;
         const int par = e[0] < 0 ? cf : base + (int) e[0], oct = (int) e[1];
-        const Cell P = top.cells[par];
-        Cell ch;
-        ch.level = P.level + 1;
-        ch.parent = par;
-        ch.prefix = (P.prefix << 3) | (uint64_t) oct;
-        ch.ix = 2 * P.ix + (oct & 1);
-        ch.iy = 2 * P.iy + ((oct >> 1) & 1);
-        ch.iz = 2 * P.iz + ((oct >> 2) & 1);
+        Cell ch = child_cell(top.cells[par], par, oct);
         ch.gsrc = (uint32_t) e[2];
         ch.gtrg = (uint32_t) e[3];
         const int idx = (int) top.cells.size();

@@ -276,13 +276,7 @@ void build_octree(Octree &tree, const RootBox &root, std::size_t n_src, const do
         const bool forced = t >= 0 && top->cells[t].n_children > 0;
         const int top_child = forced ? top->cells[t].child[oct] : -1;
         if (forced ? top_child >= 0 : (se > sp || te > tp)) {
-          Cell ch;
-          ch.level = level + 1;
-          ch.parent = ci;
-          ch.prefix = (c.prefix << 3) | (uint64_t) oct;
-          ch.ix = 2 * c.ix + (oct & 1);
-          ch.iy = 2 * c.iy + ((oct >> 1) & 1);
-          ch.iz = 2 * c.iz + ((oct >> 2) & 1);
+          Cell ch = child_cell(c, ci, oct);
           ch.src_begin = sp;
           ch.src_end = se;
           ch.trg_begin = tp;

@@ -40,6 +40,20 @@ struct Cell {
   uint32_t n_trg() const { return trg_end - trg_begin; }
 };
 
+// Child of cell P (index parent) in octant oct (bit0 x, bit1 y, bit2 z): level, parent, Morton
+// prefix and anchor; counts and ranges left empty.
+inline Cell child_cell(const Cell &P, int parent, int oct)
+{
+  Cell ch;
+  ch.level = P.level + 1;
+  ch.parent = parent;
+  ch.prefix = (P.prefix << 3) | (uint64_t) oct;
+  ch.ix = 2 * P.ix + (oct & 1);
+  ch.iy = 2 * P.iy + ((oct >> 1) & 1);
+  ch.iz = 2 * P.iz + ((oct >> 2) & 1);
+  return ch;
+}
+
 struct Octree {
   RootBox root;
   int depth = 0;                      // deepest level present

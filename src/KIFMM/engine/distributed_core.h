@@ -1,7 +1,10 @@
-// FmmEvaluator<K>::evaluate_distributed (included at the end of fmm_core.h). The setup that
-// does not depend on the kernel (root, top tree, ghost import) is distributed.h/.cpp; here:
-// the local tree over own + ghost points with the global top copied in, the exchange of the
-// frontier densities, the top M2M, and the usual passes for this rank's targets.
+// FmmEvaluator<K>::evaluate_distributed (included at the end of fmm_core.h). The parts that
+// do not depend on the kernel (root, top tree, whole-cell imports, the locally essential
+// trees' requests and answers) are distributed.h/.cpp; here: when some rank needs a LET, a first
+// tree over own + whole-imported points and its upward densities (what the LET answers and the
+// frontier densities are made of); the evaluation tree over own + ghost points with the global
+// top (extended by the LET cells) copied in, its densities (copied, received or computed), the
+// exchange of the frontier densities, the top M2M, and the usual passes for this rank's targets.
 // Periodic boundaries: the root is the periodic cell (every rank wraps its own points into it),
 // ghosts are requested through the cell's faces too, the local lists are the periodic ones
 // (image shifts), the root's lattice operator acts on the reduced root density (the same on

@@ -77,6 +77,7 @@ struct Result {
   double grad = 0, pot = 0;    // max abs difference / max abs serial value, over all ranks
   std::size_t ghosts = 0, own = 0, comm_bytes = 0;    // max over ranks
   std::size_t let_cells = 0, let_bytes = 0;           // summed over ranks
+  std::size_t mutual_pairs = 0;                        // summed over ranks
 };
 
 // periodic_half > 0: periodic boundaries, the cell [-periodic_half, periodic_half]^3
@@ -124,11 +125,12 @@ Result compare(const K &k, const kifmm::KernelSpec &spec, const Points &all, con
   MPI_Allreduce(MPI_IN_PLACE, e, 2, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
   unsigned long long c[3] = {dist.stats().n_ghosts, idx.size(), dist.stats().comm_bytes};
   MPI_Allreduce(MPI_IN_PLACE, c, 3, MPI_UNSIGNED_LONG_LONG, MPI_MAX, MPI_COMM_WORLD);
-  unsigned long long l[2] = {dist.stats().let_cells, dist.stats().let_bytes};
-  MPI_Allreduce(MPI_IN_PLACE, l, 2, MPI_UNSIGNED_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
+  unsigned long long l[3] = {dist.stats().let_cells, dist.stats().let_bytes, dist.stats().mutual_pairs};
+  MPI_Allreduce(MPI_IN_PLACE, l, 3, MPI_UNSIGNED_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
   Result r;
   r.let_cells = l[0];
   r.let_bytes = l[1];
+  r.mutual_pairs = l[2];
   r.grad = e[0];
   r.pot = e[1];
   r.ghosts = c[0];
@@ -264,6 +266,26 @@ void check_ghosts_are_local(const Points &p, double periodic_half)
     printf("  %s, max over ranks: own points %zu, ghost points %zu (others' points %.0f), bytes sent %zu\n",
            periodic_half > 0 ? "periodic" : "open", r.own, r.ghosts, others, r.comm_bytes);
   EXPECT_GT(r.comm_bytes, 0u);
+}
+
+// Pairs of adjacent leaves that hold only own points are evaluated once for both sides (the
+// equality with serial is checked by every test above; here that such pairs exist, and that a
+// partition where every leaf mixes ranks has none and still equals serial)
+TEST(Distributed, OwnLeafPairsAreMutual)
+{
+  kifmm::LaplaceKernel k;
+  kifmm::KernelSpec spec;
+  Points p = uniform_cube(8000, 29);
+  Result r = compare(k, spec, p, blocks, 0, 32);
+  EXPECT_LE(r.grad, 1e-10);
+  EXPECT_LE(r.pot, 1e-10);
+  EXPECT_GT(r.mutual_pairs, 0u);
+  if (size_of_world() > 1) {
+    Result m = compare(k, spec, p, random_owner, 0, 32);
+    EXPECT_LE(m.grad, 1e-10);
+    EXPECT_LE(m.pot, 1e-10);
+    EXPECT_EQ(m.mutual_pairs, 0u);
+  }
 }
 
 TEST(Distributed, GhostsAreLocal)

@@ -211,7 +211,23 @@ void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, co
   stats_.t_wx = t6 - t5;
   downward();
   stats_.t_downward = omp_get_wtime() - t6;
+  // near field: pairs of leaves that hold only own points (all of them sources) are evaluated
+  // once for both sides (open boundaries), the rest one-sided (sources include ghost points)
+  mutual_.clear();
+  if (!opt_.periodic) {
+    std::vector<char> own_only(nc, 0);
+    for (int b : tree_.leaves) {
+      const Cell &B = tree_.cells[b];
+      bool same = B.n_trg() > 0 && B.n_trg() == B.n_src() && B.gsrc == B.n_src() && B.gtrg == B.n_trg();
+      for (uint32_t k = 0; same && k < B.n_src(); ++k)
+        same = sx_[B.src_begin + k] == tx_[B.trg_begin + k] && sy_[B.src_begin + k] == ty_[B.trg_begin + k] &&
+            sz_[B.src_begin + k] == tz_[B.trg_begin + k];
+      own_only[b] = same;
+    }
+    plan_mutual_partial(tree_, lists_, own_only, mutual_);
+  }
   leaf_pass(pot != nullptr, grad != nullptr);
+  mutual_.clear();
   if (opt_.periodic) periodic_near(pot != nullptr);
   results_to_input_order(n, pot, grad);
   // a point of nonzero strength meets itself once (not a coincident pair)

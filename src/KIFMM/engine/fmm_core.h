@@ -490,17 +490,20 @@ template <class K> void FmmEvaluator<K>::leaf_pass(bool want_pot, bool want_grad
     stats_.mutual_pairs = mutual_.pairs.size();
     stats_.coincident_pairs += mutual_near(want_pot, mutual_.pairs, mutual_.color_off, mutual_.self_leaves, 0.0);
   }
-#pragma omp parallel if (!mutual_.active)
+  // (a partial plan leaves the U entries with an unmarked leaf to the one-sided loop)
+  const bool all_mutual = mutual_.active && !mutual_.partial;
+#pragma omp parallel if (!all_mutual)
   {
     std::vector<std::pair<uint32_t, uint32_t>> ranges;
 #pragma omp for schedule(dynamic, 1)
     for (int li = 0; li < nleaf; ++li) {
       const int b = tree_.leaves[li];
       const Cell &B = cells[b];
-      if (B.n_trg() == 0 || mutual_.active) continue;
+      if (B.n_trg() == 0 || all_mutual) continue;
+      const bool b_mutual = mutual_.partial && mutual_.leaf_mutual[b];
       ranges.clear();
       for (const int *a = lists_.U.begin(b); a != lists_.U.end(b); ++a)
-        ranges.emplace_back(cells[*a].src_begin, cells[*a].src_end);
+        if (!(b_mutual && mutual_.leaf_mutual[*a])) ranges.emplace_back(cells[*a].src_begin, cells[*a].src_end);
       std::sort(ranges.begin(), ranges.end());
       std::size_t nr = 0;
       for (std::size_t i = 0; i < ranges.size(); ++i) {
@@ -595,16 +598,18 @@ std::size_t FmmEvaluator<K>::mutual_near(bool want_pot, const std::vector<Mutual
   const double no_shift[3] = {0, 0, 0};
   auto run = [&](int a, int b, const double *sh, bool self_pair) -> std::size_t {
     const Cell &A = cells[a], &B = cells[b];
-    const std::size_t i0 = A.src_begin, j0 = B.src_begin;
+    // positions and strengths by the source ranges, accumulators by the target ranges (the
+    // same points in the same order; the same ranges too unless ghosts are sources)
+    const std::size_t i0 = A.src_begin, j0 = B.src_begin, ti = A.trg_begin, tj = B.trg_begin;
     std::size_t z = 0;
     if (want_pot)
-      p2p_mutual<K, true>(k_, self_pair, A.n_src(), &sx_[i0], &sy_[i0], &sz_[i0], &sq_[i0], &tp_[i0], &tgx_[i0],
-                          &tgy_[i0], &tgz_[i0], B.n_src(), &sx_[j0], &sy_[j0], &sz_[j0], &sq_[j0], &tp_[j0],
-                          &tgx_[j0], &tgy_[j0], &tgz_[j0], sh, &z);
+      p2p_mutual<K, true>(k_, self_pair, A.n_src(), &sx_[i0], &sy_[i0], &sz_[i0], &sq_[i0], &tp_[ti], &tgx_[ti],
+                          &tgy_[ti], &tgz_[ti], B.n_src(), &sx_[j0], &sy_[j0], &sz_[j0], &sq_[j0], &tp_[tj],
+                          &tgx_[tj], &tgy_[tj], &tgz_[tj], sh, &z);
     else
-      p2p_mutual<K, false>(k_, self_pair, A.n_src(), &sx_[i0], &sy_[i0], &sz_[i0], &sq_[i0], &tp_[i0], &tgx_[i0],
-                           &tgy_[i0], &tgz_[i0], B.n_src(), &sx_[j0], &sy_[j0], &sz_[j0], &sq_[j0], &tp_[j0],
-                           &tgx_[j0], &tgy_[j0], &tgz_[j0], sh, &z);
+      p2p_mutual<K, false>(k_, self_pair, A.n_src(), &sx_[i0], &sy_[i0], &sz_[i0], &sq_[i0], &tp_[ti], &tgx_[ti],
+                           &tgy_[ti], &tgz_[ti], B.n_src(), &sx_[j0], &sy_[j0], &sz_[j0], &sq_[j0], &tp_[tj],
+                           &tgx_[tj], &tgy_[tj], &tgz_[tj], sh, &z);
     return z;
   };
   // One task per pair, created in the order self leaves, color 0, 1, ... with a dependence on

@@ -196,4 +196,35 @@ bool plan_mutual_open(const Octree &tree, const InteractionLists &lists, MutualP
   return true;
 }
 
+bool plan_mutual_partial(const Octree &tree, const InteractionLists &lists, const std::vector<char> &mutual,
+                         MutualPlan &plan)
+{
+  plan.clear();
+  const int n = (int) tree.cells.size();
+  if (lists.U.off.size() != (std::size_t) n + 1 || mutual.size() != (std::size_t) n) return false;
+  std::vector<MutualPair> keep;
+  std::vector<int> self;
+  for (int b : tree.leaves) {
+    if (!mutual[b]) continue;
+    bool has_self = false;
+    for (const int *a = lists.U.begin(b); a != lists.U.end(b); ++a) {
+      if (*a == b) has_self = true;
+      else if (mutual[*a] && *a > b) {
+        if (!std::binary_search(lists.U.begin(*a), lists.U.end(*a), b)) return false;    // (U rows are sorted)
+        keep.push_back({b, *a, {0, 0, 0}});
+      }
+    }
+    if (!has_self) return false;
+    self.push_back(b);
+  }
+  if (self.empty()) return false;
+  color_mutual_pairs(n, keep, plan.color_off);
+  plan.pairs = std::move(keep);
+  plan.self_leaves = std::move(self);
+  plan.leaf_mutual = mutual;
+  plan.partial = true;
+  plan.active = true;
+  return true;
+}
+
 }    // namespace kifmm

@@ -51,13 +51,19 @@ struct MutualPlan {
   std::vector<int> color_off;       // pairs of color c: [color_off[c], color_off[c+1])
   std::vector<int> self_leaves;     // leaves with targets (each with itself, one round)
   int w_direct_max = -1;            // open plan: W/X leaf pairs of at most this many points included
+  // partial plan (distributed evaluation): only the U pairs of leaves marked in leaf_mutual are
+  // in the plan, the leaf pass evaluates the other U entries one-sided
+  bool partial = false;
+  std::vector<char> leaf_mutual;    // per cell (partial plans)
   void clear()
   {
     active = false;
+    partial = false;
     w_direct_max = -1;
     pairs.clear();
     color_off.clear();
     self_leaves.clear();
+    leaf_mutual.clear();
   }
 };
 
@@ -76,5 +82,14 @@ void color_mutual_pairs(int n_cells, std::vector<MutualPair> &pairs, std::vector
 // leaf pass skips U, those W entries and the direct X entries when the plan is active
 // (plan.w_direct_max).
 bool plan_mutual_open(const Octree &tree, const InteractionLists &lists, MutualPlan &plan, int direct_max = -1);
+
+// Partial mutual plan of open-boundary U lists (distributed evaluation, where the sources also
+// hold ghost points that are not targets): leaves with mutual[c] set hold the same points in the
+// same order as sources and as targets (checked by the caller); every unordered pair of such
+// leaves in U (and each with itself) is in the plan, the other U entries are left to the
+// one-sided leaf pass. Accumulators are addressed by the target ranges. Returns false (plan
+// inactive) if no leaf qualifies or U is not symmetric between two marked leaves.
+bool plan_mutual_partial(const Octree &tree, const InteractionLists &lists, const std::vector<char> &mutual,
+                         MutualPlan &plan);
 
 }    // namespace kifmm

@@ -269,8 +269,8 @@ void check_ghosts_are_local(const Points &p, double periodic_half)
 }
 
 // Pairs of adjacent leaves that hold only own points are evaluated once for both sides (the
-// equality with serial is checked by every test above; here that such pairs exist, and that a
-// partition where every leaf mixes ranks has none and still equals serial)
+// equality with serial is checked by every test above; here that such pairs exist, open and
+// periodic, and that a partition where every leaf mixes ranks has none and still equals serial)
 TEST(Distributed, OwnLeafPairsAreMutual)
 {
   kifmm::LaplaceKernel k;
@@ -286,6 +286,12 @@ TEST(Distributed, OwnLeafPairsAreMutual)
     EXPECT_LE(m.pot, 1e-10);
     EXPECT_EQ(m.mutual_pairs, 0u);
   }
+  // periodic: image pairs of own leaves too
+  Points pn = neutral(p);
+  Result pr = compare(k, spec, pn, blocks, 0, 32, 6, 1.0);
+  EXPECT_LE(pr.grad, 1e-10);
+  EXPECT_LE(pr.pot, 1e-10);
+  EXPECT_GT(pr.mutual_pairs, 0u);
 }
 
 TEST(Distributed, GhostsAreLocal)

@@ -212,9 +212,10 @@ void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, co
   downward();
   stats_.t_downward = omp_get_wtime() - t6;
   // near field: pairs of leaves that hold only own points (all of them sources) are evaluated
-  // once for both sides (open boundaries), the rest one-sided (sources include ghost points)
+  // once for both sides, the rest one-sided (sources include ghost points); periodic: image
+  // pairs too (unless periodic_far found sources = targets, one rank: the whole plan)
   mutual_.clear();
-  if (!opt_.periodic) {
+  if (!opt_.periodic || !plists_.mutual) {
     std::vector<char> own_only(nc, 0);
     for (int b : tree_.leaves) {
       const Cell &B = tree_.cells[b];
@@ -224,7 +225,8 @@ void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, co
             sz_[B.src_begin + k] == tz_[B.trg_begin + k];
       own_only[b] = same;
     }
-    plan_mutual_partial(tree_, lists_, own_only, mutual_);
+    if (opt_.periodic) plan_mutual_near(tree_, lists_, plists_, &own_only);
+    else plan_mutual_partial(tree_, lists_, own_only, mutual_);
   }
   leaf_pass(pot != nullptr, grad != nullptr);
   mutual_.clear();

@@ -188,8 +188,10 @@ void build_periodic_interaction_lists(const Octree &tree, InteractionLists &list
   flatten_plain(v, lists.V);
 }
 
-bool plan_mutual_near(const Octree &tree, InteractionLists &lists, PeriodicImageLists &images)
+bool plan_mutual_near(const Octree &tree, InteractionLists &lists, PeriodicImageLists &images,
+                      const std::vector<char> *only)
 {
+  auto marked = [&](int c) { return !only || (*only)[c]; };
   const auto &cells = tree.cells;
   const int n = (int) cells.size();
   std::vector<MutualPair> keep;
@@ -200,31 +202,57 @@ bool plan_mutual_near(const Octree &tree, InteractionLists &lists, PeriodicImage
   };
   for (int li = 0; li < (int) tree.leaves.size(); ++li) {
     const int b = tree.leaves[li];
-    if (cells[b].n_trg() == 0) continue;
-    if (cells[b].n_src() != cells[b].n_trg() || cells[b].src_begin != cells[b].trg_begin) return false;
+    if (cells[b].n_trg() == 0 || !marked(b)) continue;
+    if (!only && (cells[b].n_src() != cells[b].n_trg() || cells[b].src_begin != cells[b].trg_begin)) return false;
     self.push_back(b);
     if (!lists.U.off.empty())
       for (const int *a = lists.U.begin(b); a != lists.U.end(b); ++a) {
+        if (!marked(*a)) continue;
         ++entries;
         if (*a == b) ++self_entries;
         else if (*a > b) keep.push_back({b, *a, {0, 0, 0}});
       }
     if (!images.U.off.empty())
       for (int e = images.U.begin(b); e < images.U.end(b); ++e) {
-        ++entries;
         const int a = images.U.idx[e];
+        if (!marked(a)) continue;
+        ++entries;
         const signed char *s = images.U.shift_of(e);
         if (a > b || (a == b && positive(s))) keep.push_back({b, a, {s[0], s[1], s[2]}});
       }
   }
   // every entry must have its mirror (b <- a, s) <-> (a <- b, -s); the leaf with itself once
   if (self_entries != self.size() || entries != self_entries + 2 * keep.size()) return false;
+  if (only && self.empty()) return false;
   // greedy edge coloring in a fixed order (deterministic): lowest color free at both leaves
   color_mutual_pairs(n, keep, images.color_off);
   images.pairs = std::move(keep);
   images.self_leaves = std::move(self);
   images.mutual = true;
-  // the U entries now live in the pairs: the free-space U pass finds empty lists
+  // the U entries now live in the pairs: the free-space U pass finds empty lists (with `only`:
+  // the entries between two marked leaves leave the lists)
+  if (only) {
+    CellList u;
+    ImageList iu;
+    u.off.assign(n + 1, 0);
+    iu.off.assign(n + 1, 0);
+    for (int b = 0; b < n; ++b) {
+      if (!lists.U.off.empty())
+        for (const int *a = lists.U.begin(b); a != lists.U.end(b); ++a)
+          if (!(marked(b) && marked(*a))) u.idx.push_back(*a);
+      if (!images.U.off.empty())
+        for (int e = images.U.begin(b); e < images.U.end(b); ++e)
+          if (!(marked(b) && marked(images.U.idx[e]))) {
+            iu.idx.push_back(images.U.idx[e]);
+            iu.shift.insert(iu.shift.end(), images.U.shift_of(e), images.U.shift_of(e) + 3);
+          }
+      u.off[b + 1] = (int) u.idx.size();
+      iu.off[b + 1] = (int) iu.idx.size();
+    }
+    lists.U = std::move(u);
+    images.U = std::move(iu);
+    return true;
+  }
   lists.U.off.assign(n + 1, 0);
   lists.U.idx.clear();
   images.U.off.assign(n + 1, 0);

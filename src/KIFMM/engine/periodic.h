@@ -67,8 +67,13 @@ struct PeriodicImageLists {
 
 // Mutual plan from the periodic lists (U plain entries in `lists`, image ones in `images`):
 // returns false (and changes nothing) when the U relation is not symmetric; otherwise fills images.pairs/color_off/self_leaves and empties
-// lists.U. Only for trees whose sources and targets are the same points.
-bool plan_mutual_near(const Octree &tree, InteractionLists &lists, PeriodicImageLists &images);
+// lists.U. Only for trees whose sources and targets are the same points. With `only`
+// (distributed evaluation: sources include ghost points), just the leaves marked there (the
+// same points in the same order among sources and targets, checked by the caller) and the
+// entries between two of them: those entries leave the U lists, the others stay for the
+// one-sided passes.
+bool plan_mutual_near(const Octree &tree, InteractionLists &lists, PeriodicImageLists &images,
+                      const std::vector<char> *only = nullptr);
 
 // Periodic lists of a tree whose root is the periodic cell (see above).
 void build_periodic_interaction_lists(const Octree &tree, InteractionLists &lists,

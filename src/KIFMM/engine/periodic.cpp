@@ -229,35 +229,27 @@ bool plan_mutual_near(const Octree &tree, InteractionLists &lists, PeriodicImage
   images.pairs = std::move(keep);
   images.self_leaves = std::move(self);
   images.mutual = true;
-  // the U entries now live in the pairs: the free-space U pass finds empty lists (with `only`:
-  // the entries between two marked leaves leave the lists)
-  if (only) {
-    CellList u;
-    ImageList iu;
-    u.off.assign(n + 1, 0);
-    iu.off.assign(n + 1, 0);
-    for (int b = 0; b < n; ++b) {
-      if (!lists.U.off.empty())
-        for (const int *a = lists.U.begin(b); a != lists.U.end(b); ++a)
-          if (!(marked(b) && marked(*a))) u.idx.push_back(*a);
-      if (!images.U.off.empty())
-        for (int e = images.U.begin(b); e < images.U.end(b); ++e)
-          if (!(marked(b) && marked(images.U.idx[e]))) {
-            iu.idx.push_back(images.U.idx[e]);
-            iu.shift.insert(iu.shift.end(), images.U.shift_of(e), images.U.shift_of(e) + 3);
-          }
-      u.off[b + 1] = (int) u.idx.size();
-      iu.off[b + 1] = (int) iu.idx.size();
-    }
-    lists.U = std::move(u);
-    images.U = std::move(iu);
-    return true;
+  // the U entries between two marked leaves (without `only`: all) now live in the pairs and
+  // leave the lists; the others stay for the one-sided passes
+  CellList u;
+  ImageList iu;
+  u.off.assign(n + 1, 0);
+  iu.off.assign(n + 1, 0);
+  for (int b = 0; b < n; ++b) {
+    if (!lists.U.off.empty())
+      for (const int *a = lists.U.begin(b); a != lists.U.end(b); ++a)
+        if (!(marked(b) && marked(*a))) u.idx.push_back(*a);
+    if (!images.U.off.empty())
+      for (int e = images.U.begin(b); e < images.U.end(b); ++e)
+        if (!(marked(b) && marked(images.U.idx[e]))) {
+          iu.idx.push_back(images.U.idx[e]);
+          iu.shift.insert(iu.shift.end(), images.U.shift_of(e), images.U.shift_of(e) + 3);
+        }
+    u.off[b + 1] = (int) u.idx.size();
+    iu.off[b + 1] = (int) iu.idx.size();
   }
-  lists.U.off.assign(n + 1, 0);
-  lists.U.idx.clear();
-  images.U.off.assign(n + 1, 0);
-  images.U.idx.clear();
-  images.U.shift.clear();
+  lists.U = std::move(u);
+  images.U = std::move(iu);
   return true;
 }
 

@@ -3,14 +3,16 @@
 // OMP_NUM_THREADS=1 on a shared machine), minimum of --reps. Uniform random charges (neutral)
 // in the cube [-1,1]^3; the free-space evaluator gets the same cube as fixed root. Potential +
 // gradient, sources = targets.
-// Default: four evaluators timed alternately (open and periodic, each at the leaf size of the
-// cost model, choose_tree, as kspace_style kifmm uses it, and at the per-order calibrated leaf
-// size of the engine default): the table gives the periodic/open ratio at the model's choice
-// and each mode's model/calibrated CPU ratio.
+// Default: the trees kspace_style kifmm chooses on one rank from the points (choose_tree(kernel,
+// options, n, xyz): open, and periodic, which may be the single-level grid of periodic_grid.h)
+// and the periodic octree of that choice without the grid, timed alternately: the table gives
+// the periodic/open ratio of the choices and of the octree alone.
 // With --leaves every leaf size is timed for both modes (alternately) and the fastest of each
 // mode is reported.
+// With --grids the periodic single-level grids of k^3 cells (periodic_grid.h) are timed beside
+// the open and periodic octree evaluations at the model's leaf size (all alternately).
 //   bench_periodic [--sizes 1e4,3e4,1e5] [--orders 4,5,6,7,8] [--leaves 64,128,256,512]
-//                  [--reps 3] [--phases]
+//                  [--grids 4,5,6,7] [--reps 3] [--phases]
 // --phases prints the engine's phase times (wall, single thread) of the best repetition.
 #include "cost_model.h"
 #include "fmm_core.h"
@@ -59,7 +61,7 @@ struct Timing {
 // Evaluators (mode k: periodic[k], leaf[k]; 0 = engine default) timed alternately (0, 1, ...,
 // 0, 1, ...) so that all see the same machine load; minimum CPU time of each.
 void time_modes(const bench::Points &p, int order, int nm, const bool *periodic, const int *leaf, int reps,
-                Timing *out)
+                Timing *out, const int *grid = nullptr)
 {
   std::vector<std::unique_ptr<Evaluator>> ev(nm);
   const std::size_t n = p.size();
@@ -71,6 +73,7 @@ void time_modes(const bench::Points &p, int order, int nm, const bool *periodic,
     o.fixed_root = true;
     o.root_half_width = 1.0;
     o.periodic = periodic[m];
+    o.periodic_grid = grid ? grid[m] : 0;
     ev[m] = make_evaluator(KernelSpec{}, o);
     ev[m]->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());    // operators
     out[m] = Timing{};
@@ -99,25 +102,31 @@ void print_phases(const char *mode, const Stats &s)
 
 int main(int argc, char **argv)
 {
-  std::vector<double> sizes{1e4, 3e4, 1e5}, orders{4, 5, 6, 7, 8}, leaves;
+  std::vector<double> sizes{1e4, 3e4, 1e5}, orders{4, 5, 6, 7, 8}, leaves, grids;
   int reps = 3;
   bool phases = false;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--sizes") && i + 1 < argc) sizes = parse_list(argv[++i]);
     else if (!std::strcmp(argv[i], "--orders") && i + 1 < argc) orders = parse_list(argv[++i]);
     else if (!std::strcmp(argv[i], "--leaves") && i + 1 < argc) leaves = parse_list(argv[++i]);
+    else if (!std::strcmp(argv[i], "--grids") && i + 1 < argc) grids = parse_list(argv[++i]);
     else if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) reps = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--phases")) phases = true;
     else {
-      std::fprintf(stderr, "usage: %s [--sizes ..] [--orders ..] [--leaves ..] [--reps R] [--phases]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--sizes ..] [--orders ..] [--leaves ..] [--grids ..] [--reps R] [--phases]\n", argv[0]);
       return 1;
     }
   }
-  if (leaves.empty()) {
-    std::printf("| N | order | open leaf (depth) | open CPU s | periodic leaf (depth) | periodic CPU s | periodic/open |"
-                " calibrated leaf (depth open, periodic) | periodic/open calibrated | open model/calibrated |"
-                " periodic model/calibrated |\n");
-    std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
+  if (!grids.empty()) {
+    std::printf("| N | order | open CPU s (depth) | periodic octree CPU s (depth) | octree/open |");
+    for (double k : grids) std::printf(" grid %d CPU s | grid %d/open |", (int) k, (int) k);
+    std::printf("\n|---|---|---|---|---|");
+    for (std::size_t i = 0; i < grids.size(); ++i) std::printf("---|---|");
+    std::printf("\n");
+  } else if (leaves.empty()) {
+    std::printf("| N | order | open leaf (depth) | open CPU s | periodic choice | periodic CPU s | periodic/open |"
+                " periodic octree leaf (depth) | periodic octree CPU s | octree/open |\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
   } else {
     std::printf("| N | order | free leaf (depth) | free CPU s | periodic leaf (depth) | periodic CPU s | ratio |\n");
     std::printf("|---|---|---|---|---|---|---|\n");
@@ -130,20 +139,54 @@ int main(int argc, char **argv)
     for (double &q : p.q) q -= s / n;
     for (double od : orders) {
       const int order = (int) od;
-      if (leaves.empty()) {    // model choice (0: open, 1: periodic) and calibrated leaf (2, 3)
-        const bool per[4] = {false, true, false, true};
-        const int lf[4] = {choose_tree(order, n, false).leaf_size, choose_tree(order, n, true).leaf_size, 0, 0};
-        Timing t[4];
-        time_modes(p, order, 4, per, lf, reps, t);
+      if (!grids.empty()) {    // 0: open, 1: periodic octree (model leaf), 2..: periodic grids
+        const int nm = 2 + (int) grids.size();
+        std::vector<char> per(nm, 1);
+        per[0] = 0;
+        std::vector<int> lf(nm, 0), gr(nm, 0);
+        lf[0] = choose_tree(order, n, false).leaf_size;
+        lf[1] = choose_tree(order, n, true).leaf_size;
+        for (std::size_t i = 0; i < grids.size(); ++i) gr[2 + i] = (int) grids[i];
+        std::vector<Timing> t(nm);
+        bool perb[64];
+        for (int m = 0; m < nm; ++m) perb[m] = per[m];
+        time_modes(p, order, nm, perb, lf.data(), reps, t.data(), gr.data());
         if (phases)
-          for (int m = 0; m < 4; ++m) {
-            std::printf("    N=%zu p=%d leaf=%d depth=%d %s cpu %.4f\n", n, order, t[m].leaf, t[m].depth,
+          for (int m = 0; m < nm; ++m) {
+            std::printf("    N=%zu p=%d %s grid %d cpu %.4f\n", n, order, per[m] ? "periodic" : "free", gr[m], t[m].cpu);
+            print_phases(per[m] ? "periodic" : "free", t[m].stats);
+          }
+        std::printf("| %zu | %d | %.4f (%d) | %.4f (%d) | %.2f |", n, order, t[0].cpu, t[0].depth, t[1].cpu, t[1].depth,
+                    t[1].cpu / t[0].cpu);
+        for (int m = 2; m < nm; ++m) std::printf(" %.4f | %.2f |", t[m].cpu, t[m].cpu / t[0].cpu);
+        std::printf("\n");
+        std::fflush(stdout);
+        continue;
+      }
+      if (leaves.empty()) {    // the choices of kspace_style kifmm on one rank (from the points),
+                               // and the periodic octree of that choice without the grid
+        Options oo, op;
+        oo.order = op.order = order;
+        oo.fixed_root = op.fixed_root = true;
+        op.periodic = true;
+        const TreeChoice co = choose_tree(KernelSpec{}, oo, n, p.xyz.data());
+        const TreeChoice cp = choose_tree(KernelSpec{}, op, n, p.xyz.data());
+        const bool per[3] = {false, true, true};
+        const int lf[3] = {co.leaf_size, cp.leaf_size, cp.leaf_size}, gr[3] = {0, cp.grid, 0};
+        Timing t[3];
+        time_modes(p, order, 3, per, lf, reps, t, gr);
+        if (phases)
+          for (int m = 0; m < 3; ++m) {
+            std::printf("    N=%zu p=%d leaf=%d grid=%d depth=%d %s cpu %.4f\n", n, order, t[m].leaf, gr[m], t[m].depth,
                         per[m] ? "periodic" : "free", t[m].cpu);
             print_phases(per[m] ? "periodic" : "free", t[m].stats);
           }
-        std::printf("| %zu | %d | %d (%d) | %.4f | %d (%d) | %.4f | %.2f | %d (%d, %d) | %.2f | %.2f | %.2f |\n", n,
-                    order, t[0].leaf, t[0].depth, t[0].cpu, t[1].leaf, t[1].depth, t[1].cpu, t[1].cpu / t[0].cpu,
-                    t[2].leaf, t[2].depth, t[3].depth, t[3].cpu / t[2].cpu, t[0].cpu / t[2].cpu, t[1].cpu / t[3].cpu);
+        char pc[64];
+        if (cp.grid > 0) std::snprintf(pc, sizeof pc, "grid %d^3", cp.grid);
+        else std::snprintf(pc, sizeof pc, "leaf %d (%d)", t[1].leaf, t[1].depth);
+        std::printf("| %zu | %d | %d (%d) | %.4f | %s | %.4f | %.2f | %d (%d) | %.4f | %.2f |\n", n, order, t[0].leaf,
+                    t[0].depth, t[0].cpu, pc, t[1].cpu, t[1].cpu / t[0].cpu, t[2].leaf, t[2].depth, t[2].cpu,
+                    t[2].cpu / t[0].cpu);
         std::fflush(stdout);
         continue;
       }

@@ -16,6 +16,9 @@
 // the actual trees (actual_tree_counts, cost_model.h).
 // Prints the table rows (ns) on stdout, the measured and fitted times on stderr.
 //
+// `calibrate --grid-cost [--orders 3-10] [--reps 3]` regenerates kGridCost (calibration.cpp): the
+// per-cell constant of the periodic single-level grid (grid_cost_fit below).
+//
 // `calibrate --periodic-errors [--orders 3-13]` measures the periodic column of the choose_order
 // table: relative RMS force error over all points of periodic evaluations (tree of
 // choose_tree) of uniform points in the cell [-1,1]^3 (bench::uniform(n, seed), charges made
@@ -241,10 +244,73 @@ int periodic_errors(int order_lo, int order_hi)
   return 0;
 }
 
+// Per-cell constant of the periodic single-level grid (kGridCost in calibration.cpp): for each
+// order, single-thread CPU times (minimum of reps) of grid evaluations of uniform neutral points
+// in the cell [-1,1]^3 at N = 3e3, 1e4, 3e4 and every grid with 8 to 1000 points per cell (up
+// to max_grid_cells), minus the octree-fitted point, pair and entry terms of their actual
+// counts (grid_counts), fitted as cell * k^3 (least squares of the relative residuals).
+int grid_cost_fit(int order_lo, int order_hi, int reps)
+{
+  std::printf("    // order, cell (ns)   [rms relative residual of the fit]\n");
+  for (int order = order_lo; order <= order_hi; ++order) {
+    double sxy = 0, sxx = 0;
+    struct Run {
+      double cpu, rest, cells;
+    };
+    std::vector<Run> runs;
+    for (double nd : {3e3, 1e4, 3e4}) {
+      const std::size_t n = (std::size_t) nd;
+      bench::Points p = bench::uniform(n, 7);
+      double qs = 0;
+      for (double q : p.q) qs += q;
+      for (double &q : p.q) q -= qs / n;
+      for (int k = 3; k <= max_grid_cells(order); ++k) {
+        const double m = nd / (k * k * k);
+        if (m < 8 || m > 1000) continue;
+        Options o;
+        o.order = order;
+        o.fixed_root = true;
+        o.periodic = true;
+        o.periodic_grid = k;
+        auto ev = make_evaluator(KernelSpec{}, o);
+        std::vector<double> pot(n), g(3 * n);
+        ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());    // kernels
+        double best = 1e30;
+        for (int r = 0; r < reps; ++r) {
+          const double c0 = cpu_now();
+          ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());
+          best = std::min(best, cpu_now() - c0);
+        }
+        const TreeCounts t = grid_counts(n, p.xyz.data(), o.root_center, 1.0, k);
+        const CostConstants c = cost_constants(order);
+        const double rest = c.point * nd + c.pair * (t.near_pairs + self_pair_extra() * t.self_pairs) + c.entry * t.entries;
+        runs.push_back({best, rest, t.cells});
+        sxy += (best - rest) * t.cells / (best * best);
+        sxx += t.cells * t.cells / (best * best);
+        std::fprintf(stderr, "order %d N %zu k %d: cpu %.4f s, pair/point/entry terms %.4f s\n", order, n, k, best, rest);
+      }
+    }
+    const double cell = sxx > 0 ? std::max(0.0, sxy / sxx) : 0.0;
+    double rr = 0;
+    for (const Run &r : runs) rr += std::pow((r.rest + cell * r.cells - r.cpu) / r.cpu, 2);
+    std::printf("    {%d, %.4g},    // [%.3f]\n", order, 1e9 * cell, runs.empty() ? 0.0 : std::sqrt(rr / runs.size()));
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
 }    // namespace
 
 int main(int argc, char **argv)
 {
+  if (argc > 1 && !std::strcmp(argv[1], "--grid-cost")) {
+    int lo = 3, hi = 10, reps = 3;
+    for (int i = 2; i + 1 < argc; i += 2) {
+      if (!std::strcmp(argv[i], "--orders")) std::sscanf(argv[i + 1], "%d-%d", &lo, &hi);
+      else if (!std::strcmp(argv[i], "--reps")) reps = std::atoi(argv[i + 1]);
+    }
+    return grid_cost_fit(lo, hi, reps);
+  }
   if (argc > 1 && !std::strcmp(argv[1], "--periodic-errors")) {
     int lo = 3, hi = 14;
     if (argc > 3 && !std::strcmp(argv[2], "--orders")) std::sscanf(argv[3], "%d-%d", &lo, &hi);

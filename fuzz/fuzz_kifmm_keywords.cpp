@@ -29,6 +29,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
   if (why.empty()) {
     if (consumed < 2 || consumed > (int) args.size()) abort();
     if (s.order != 0 && (s.order < kifmm_min_order || s.order > kifmm_max_order)) abort();
+    if (s.grid < -1 || (s.grid > 0 && (s.grid < kifmm_min_grid || s.grid > kifmm_max_grid))) abort();
     if (s.leaf < 0 || s.gravity_G <= 0 || s.kappa < 0 || s.check_every < 0) abort();
   } else if (consumed != 0) {
     abort();

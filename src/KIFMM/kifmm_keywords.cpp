@@ -60,7 +60,7 @@ std::string parse_kifmm_keywords(const std::vector<std::string> &args, KIFMMSett
   if (args.empty() || args[0] != "kifmm") return "kspace_modify: expected keyword 'kifmm'";
   const std::string who = "kspace_modify kifmm: ";
   size_t i = 1;
-  if (args.size() == 1) return who + "no keyword given (kernel, order, leaf, check or cache)";
+  if (args.size() == 1) return who + "no keyword given (kernel, order, leaf, grid, check, jeans or cache)";
   while (i < args.size()) {
     const std::string &kw = args[i];
     if (kw == "kernel") {
@@ -102,6 +102,21 @@ std::string parse_kifmm_keywords(const std::vector<std::string> &args, KIFMMSett
       if (!to_int(args[i + 1], m)) return who + "leaf '" + args[i + 1] + "' is not an integer";
       if (m < 1 || m > 100000) return who + "leaf " + args[i + 1] + " is out of range 1..100000";
       s.leaf = m;
+      i += 2;
+    } else if (kw == "grid") {
+      if (i + 1 >= args.size()) return who + "keyword 'grid' needs a value: auto, no or the cells per side (>= 3)";
+      int k;
+      if (args[i + 1] == "auto")
+        s.grid = -1;
+      else if (args[i + 1] == "no")
+        s.grid = 0;
+      else if (!to_int(args[i + 1], k))
+        return who + "grid '" + args[i + 1] + "' must be auto, no or an integer";
+      else if (k < kifmm_min_grid || k > kifmm_max_grid)
+        return who + "grid " + args[i + 1] + " is out of range " + std::to_string(kifmm_min_grid) + ".." +
+            std::to_string(kifmm_max_grid);
+      else
+        s.grid = k;
       i += 2;
     } else if (kw == "check") {
       if (i + 2 >= args.size()) return who + "keyword 'check' needs 2 values: EVERY NSAMPLE";

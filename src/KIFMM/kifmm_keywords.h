@@ -17,6 +17,9 @@ struct KIFMMSettings {
   double kappa = 0.0;        // yukawa: qqrd2e q_i q_j exp(-kappa r) / r
   int order = 0;             // 0 = from accuracy (calibration); else points per surface edge
   int leaf = 0;              // 0 = from calibration; else max points per leaf
+  // periodic, one rank: -1 = auto (the single-level grid when the cost model prefers it to the
+  // octree), 0 = no (octree), k = grid of k^3 cells (kifmm::Options::periodic_grid)
+  int grid = -1;
   int check_every = 0;       // 0 = off; else measure the error every N steps
   int check_samples = 0;
   std::string cache_dir;     // "" = default location; "none" = in-memory only
@@ -25,6 +28,8 @@ struct KIFMMSettings {
 
 constexpr int kifmm_min_order = 2;
 constexpr int kifmm_max_order = 16;
+constexpr int kifmm_min_grid = 3;
+constexpr int kifmm_max_grid = 32;
 
 // Parses the accuracy argument of `kspace_style kifmm ACCURACY`; returns "" or an error text.
 std::string parse_accuracy(const std::string &token, KIFMMSettings &settings);

@@ -167,6 +167,18 @@ void KSpaceKIFMM::init()
   else
     opt.cache_dir = kset.cache_dir.empty() ? default_cache_dir() : kset.cache_dir;
   opt.periodic = periodic;
+  // periodic single-level grid (one rank; several ranks use the octree): given by
+  // kspace_modify kifmm grid K, or (grid auto, no leaf size given) chosen with the tree below
+  opt.periodic_grid = 0;
+  if (kset.grid > 0) {
+    if (!periodic)
+      error->all(FLERR, "kspace_modify kifmm grid {}: the single-level grid needs periodic boundaries "
+                        "(boundary p p p)", kset.grid);
+    if (kset.kernel == LongRangeKernel::Yukawa)
+      error->all(FLERR, "kspace_modify kifmm grid {}: the single-level grid is for the coulomb and "
+                        "gravity kernels, not yukawa", kset.grid);
+    if (!distributed()) opt.periodic_grid = kset.grid;
+  }
   if (kset.leaf > 0) {
     opt.leaf_size = kset.leaf;
   } else {
@@ -175,13 +187,16 @@ void KSpaceKIFMM::init()
     if (!distributed()) {
       tree_choice_pending = true;
       if (engine && engine_options.order == opt.order && engine_options.cache_dir == opt.cache_dir &&
-          engine_options.periodic == opt.periodic)
+          engine_options.periodic == opt.periodic) {
         opt.leaf_size = engine_options.leaf_size;    // kept until the new choice
+        if (kset.grid < 0) opt.periodic_grid = engine_options.periodic_grid;
+      }
     }
   }
 
   if (!engine || engine_options.order != opt.order || engine_options.leaf_size != opt.leaf_size ||
-      engine_options.cache_dir != opt.cache_dir || engine_options.periodic != opt.periodic) {
+      engine_options.cache_dir != opt.cache_dir || engine_options.periodic != opt.periodic ||
+      engine_options.periodic_grid != opt.periodic_grid) {
     engine = kifmm::make_evaluator(kernel, opt);
     reported_first_evaluation = false;
   }
@@ -199,17 +214,27 @@ void KSpaceKIFMM::init()
     if (kset.kernel == LongRangeKernel::Gravity) mesg += fmt::format(" (G = {:.8g})", kset.gravity_G);
     if (kset.kernel == LongRangeKernel::Yukawa) mesg += fmt::format(" (kappa = {:.8g})", kset.kappa);
     if (tree_choice_pending)
-      mesg += fmt::format("\n  order = {}, leaf size chosen from the atom positions at the first "
-                          "evaluation (least modelled cost of the actual trees; for {} uniformly "
+      mesg += fmt::format("\n  order = {}, {} chosen from the atom positions at the first "
+                          "evaluation (least modelled cost of the actual trees{}; for {} uniformly "
                           "spread atoms, {} boundaries: leaf size {}, tree depth {})",
-                          engine_options.order, nstrong, periodic ? "periodic" : "open",
-                          tree.leaf_size, tree.depth);
+                          engine_options.order,
+                          periodic && kset.grid < 0 && kset.kernel != LongRangeKernel::Yukawa
+                              ? "leaf size or single-level grid" : "leaf size",
+                          periodic && kset.grid < 0 && kset.kernel != LongRangeKernel::Yukawa
+                              ? " and grids" : "",
+                          nstrong, periodic ? "periodic" : "open", tree.leaf_size, tree.depth);
     else
       mesg += fmt::format("\n  order = {}, leaf size = {}", engine_options.order, engine_options.leaf_size);
     if (tree.depth >= 0 && !tree_choice_pending)
       mesg += fmt::format(" (tree depth {} for {} uniformly spread atoms, {} boundaries: least "
                           "modelled cost)",
                           tree.depth, nstrong, periodic ? "periodic" : "open");
+    if (engine_options.periodic_grid > 0)
+      mesg += fmt::format("\n  periodic single-level grid of {}^3 cells (kspace_modify kifmm grid)",
+                          engine_options.periodic_grid);
+    else if (kset.grid > 0 && distributed())
+      mesg += fmt::format("\n  kspace_modify kifmm grid {}: the grid is serial; the octree is used on {} ranks",
+                          kset.grid, comm->nprocs);
     mesg += "\n";
     if (est >= 0)
       mesg += fmt::format("  requested relative force error = {:.3g}, calibrated = {:.3g}\n",
@@ -254,13 +279,22 @@ void KSpaceKIFMM::choose_tree_from_atoms()
   const double t0 = MPI_Wtime();
   const kifmm::TreeChoice c = kifmm::choose_tree(engine->kernel(), opt, n, xyz.data());
   const double t_choice = MPI_Wtime() - t0;
-  if (c.leaf_size != opt.leaf_size) {
+  // grid auto: the choice's grid (0 = octree); grid no or K: as given
+  const int grid = kset.grid < 0 ? c.grid : opt.periodic_grid;
+  if (c.leaf_size != opt.leaf_size || grid != opt.periodic_grid) {
     opt.leaf_size = c.leaf_size;
+    opt.periodic_grid = grid;
     engine = kifmm::make_evaluator(engine->kernel(), opt);
     engine_options = engine->options();
     reported_first_evaluation = false;
   }
-  if (comm->me == 0)
+  if (comm->me != 0) return;
+  if (grid > 0)
+    utils::logmesg(lmp,
+                   "  KIFMM periodic single-level grid of {}^3 cells{} for {} atoms (modelled {:.3g} s "
+                   "per evaluation on one thread; choice {:.3g} s)\n",
+                   grid, kset.grid < 0 ? " chosen from the atom positions" : "", n, c.cost, t_choice);
+  else
     utils::logmesg(lmp,
                    "  KIFMM tree chosen from the positions of {} atoms: leaf size {} (tree depth {}, "
                    "modelled {:.3g} s per evaluation on one thread; choice {:.3g} s)\n",
@@ -293,8 +327,11 @@ void KSpaceKIFMM::check_memory(std::size_t nsources)
   // doubles); per cell: up/down equivalent densities and check values, the FFT of the
   // upward density and the M2L accumulation ((2p)^3 complex each); operators as reported
   const double surface = 6.0 * (p - 1) * (p - 1) + 2.0, grid = 8.0 * p * p * p;
-  const double bytes = 30.0 * 8.0 * (double) nsources + leaves * 8.0 / 7.0 *
+  double bytes = 30.0 * 8.0 * (double) nsources + leaves * 8.0 / 7.0 *
       (4.0 * surface * 8.0 + 2.0 * grid * 16.0) + (double) engine->stats().operator_bytes;
+  // periodic single-level grid: the spectra of all cells ((2p)^2 (p+1) complex each)
+  const double kg = engine_options.periodic_grid;
+  bytes += kg * kg * kg * (4.0 * p * p * (p + 1) * 16.0 + 4.0 * surface * 8.0);
   const double need_mb = bytes / 1048576.0;
   const double limit_mb = memory_limit_mb;
   int refuse = limit_mb > 0 && need_mb > limit_mb, any = 0;

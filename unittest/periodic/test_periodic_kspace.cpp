@@ -158,6 +158,30 @@ class Periodic : public LammpsFixture {
     free(buf);
     return out;
   }
+
+  // change_box (box scaled, atoms remapped) and fix deform during a run: kifmm with these
+  // kspace_modify kifmm keywords follows the box (compared with ewald on the new box)
+  void change_box_and_deform(const std::string &modify)
+  {
+    load(uniform_cube(800, 50));
+    // change_box: scale the box and remap the atoms, then compare with ewald on the new box
+    command("change_box all x final 0 1.3 y final 0 1.3 z final 0 1.3 remap units box");
+    Result ref = ewald_reference();
+    Result r = kifmm("1e-12", modify);
+    EXPECT_LE(relative_force_error(r.f, ref.f), 1e-10);
+    EXPECT_LE(rel(r.energy, ref.energy), 1e-10);
+    // fix deform during a run (box 1.3 -> 1.5): the energies along the run follow the box
+    // (no time integration: the atoms only follow the affine remap of the box)
+    commands("fix grow all deform 1 x final 0 1.5 y final 0 1.5 z final 0 1.5 remap x\n"
+             "thermo 10\nrun 20 post no\nunfix grow");
+    EXPECT_NEAR(box_length(), 1.5, 1e-12);
+    // fix deform changes the box at the end of a step: the energy of step 20 belongs to the box
+    // of step 19 (L = 1.49); the configuration is affine in L and E ~ 1/L
+    const double e_run = thermo("elong") * (1.3 + 0.2 * 19.0 / 20.0) / 1.5;
+    Result ref2 = ewald_reference();
+    if (rank() == 0) std::printf("  after fix deform: energy %.2e\n", rel(e_run, ref2.energy));
+    EXPECT_LE(rel(e_run, ref2.energy), 1e-10);
+  }
 };
 
 Configuration shifted_box(Configuration c, double L)
@@ -207,6 +231,41 @@ TEST_F(Periodic, NetChargeGetsBackgroundAndWarning)
   EXPECT_LE(ef, 1e-10);
   EXPECT_LE(ee, 1e-10);
   if (rank() == 0) EXPECT_NE(out.find("neutralizing background"), std::string::npos) << out;
+}
+
+// The single-level grid (kspace_modify kifmm grid K; serial, several ranks use the octree):
+// neutral random atoms, cancelling dipoles and a net charge equal ewald at 1e-10
+TEST_F(Periodic, GridEqualsEwaldOnNeutralRandom)
+{
+  load(shifted_box(uniform_cube(1000, 41), 2.0));
+  Result ref = ewald_reference();
+  Result r = kifmm("1e-12", "order 14 grid 5");
+  const double ef = relative_force_error(r.f, ref.f), ee = rel(r.energy, ref.energy);
+  if (rank() == 0) std::printf("  grid 5^3, neutral random: force %.2e energy %.2e\n", ef, ee);
+  EXPECT_LE(ef, 1e-10);
+  EXPECT_LE(ee, 1e-10);
+  auto *ks = dynamic_cast<LAMMPS_NS::KSpaceKIFMM *>(lmp->force->kspace);
+  ASSERT_NE(ks, nullptr);
+  int nprocs = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &nprocs);
+  if (nprocs == 1) EXPECT_EQ(ks->engine_stats().n_leaves, 125u);
+}
+
+TEST_F(Periodic, GridEqualsEwaldOnDipolesWithNetCharge)
+{
+  Configuration c = dipoles(800, 42, 0.02);
+  const Configuration u = uniform_cube(200, 55);
+  for (std::size_t i = 0; i < u.x.size(); ++i) {    // and 200 atoms of charge +0.25: net charge 50
+    c.x.push_back(u.x[i]);
+    c.q.push_back(0.25);
+  }
+  load(c);
+  Result ref = ewald_reference();
+  Result r = kifmm("1e-12", "order 14 grid 4");
+  const double ef = relative_force_error(r.f, ref.f), ee = rel(r.energy, ref.energy);
+  if (rank() == 0) std::printf("  grid 4^3, dipoles + net charge 50: force %.2e energy %.2e\n", ef, ee);
+  EXPECT_LE(ef, 1e-10);
+  EXPECT_LE(ee, 1e-10);
 }
 
 TEST_F(Periodic, CompleteLammpsEwaldWithCoulLong)
@@ -262,13 +321,19 @@ TEST_F(Periodic, MeasuredErrorWithinRequestedAccuracy)
   }
   load(c);
   Result ref = ewald_reference();
-  for (const char *acc : {"1e-3", "1e-4", "1e-5", "1e-6", "1e-7"}) {
-    Result r = kifmm(acc);
-    const double ef = relative_force_error(r.f, ref.f), ee = rel(r.energy, ref.energy);
-    if (rank() == 0) std::printf("  accuracy %s: measured force error %.2e, energy %.2e\n", acc, ef, ee);
-    EXPECT_LE(ef, std::stod(acc)) << acc;
-    EXPECT_LE(ee, std::stod(acc)) << acc;
-  }
+  // the choice of the cost model (on one rank a single-level grid for these 3000 atoms) and
+  // the octree (grid no)
+  for (const char *grid : {"auto", "no"})
+    for (const char *acc : {"1e-3", "1e-4", "1e-5", "1e-6", "1e-7"}) {
+      Result r = kifmm(acc, std::string("grid ") + grid);
+      const double ef = relative_force_error(r.f, ref.f), ee = rel(r.energy, ref.energy);
+      auto *ks = dynamic_cast<LAMMPS_NS::KSpaceKIFMM *>(lmp->force->kspace);
+      if (rank() == 0)
+        std::printf("  grid %s (%zu cells/leaves) accuracy %s: measured force error %.2e, energy %.2e\n", grid,
+                    ks->engine_stats().n_leaves, acc, ef, ee);
+      EXPECT_LE(ef, std::stod(acc)) << acc << " grid " << grid;
+      EXPECT_LE(ee, std::stod(acc)) << acc << " grid " << grid;
+    }
 }
 
 // Without a leaf keyword the leaf size is chosen from the atom positions at the first
@@ -295,15 +360,28 @@ class PeriodicTreeChoice : public Periodic {
     const kifmm::TreeChoice c = kifmm::choose_tree(order, 3000, periodic);
     auto *ks = dynamic_cast<LAMMPS_NS::KSpaceKIFMM *>(lmp->force->kspace);
     ASSERT_NE(ks, nullptr);
-    const std::string line = "order = " + std::to_string(order) +
-        ", leaf size chosen from the atom positions at the first evaluation (least modelled cost of "
-        "the actual trees; for 3000 uniformly spread atoms, " +
+    const std::string line = "order = " + std::to_string(order) + ", " +
+        (periodic ? "leaf size or single-level grid" : "leaf size") +
+        " chosen from the atom positions at the first evaluation (least modelled cost of "
+        "the actual trees" + (periodic ? " and grids" : "") + "; for 3000 uniformly spread atoms, " +
         (periodic ? "periodic" : "open") + " boundaries: leaf size " + std::to_string(c.leaf_size) + ", tree depth " +
         std::to_string(c.depth) + ")";
     const std::string chosen = "KIFMM tree chosen from the positions of 3000 atoms: leaf size ";
+    const std::string grid = "KIFMM periodic single-level grid of ";
     if (rank() == 0) {
       EXPECT_NE(out.find(line), std::string::npos) << line << "\n" << out;
-      const std::size_t at = out.find(chosen);
+      const std::size_t at = out.find(chosen), gat = out.find(grid);
+      if (gat != std::string::npos) {    // periodic: a grid of k^3 cells (no octree depth)
+        ASSERT_TRUE(periodic) << out;
+        int k = 0;
+        ASSERT_EQ(std::sscanf(out.c_str() + gat + grid.size(), "%d", &k), 1) << out;
+        EXPECT_GE(k, 3);
+        EXPECT_EQ(ks->engine_stats().n_leaves, (std::size_t) k * k * k) << out;
+        EXPECT_EQ(ks->engine_stats().depth, 0);
+        EXPECT_NE(out.find(std::to_string(k) + "^3 cells chosen from the atom positions for 3000 atoms"),
+                  std::string::npos) << out;
+        return;
+      }
       ASSERT_NE(at, std::string::npos) << out;
       int leaf = 0, depth = -1;
       ASSERT_EQ(std::sscanf(out.c_str() + at + chosen.size(), "%d (tree depth %d", &leaf, &depth), 2) << out;
@@ -389,24 +467,12 @@ TEST_F(Periodic, GravityJeansEqualsCoulombWithBackground)
 
 TEST_F(Periodic, ChangeBoxAndFixDeformFollowTheBox)
 {
-  load(uniform_cube(800, 50));
-  // change_box: scale the box and remap the atoms, then compare with ewald on the new box
-  command("change_box all x final 0 1.3 y final 0 1.3 z final 0 1.3 remap units box");
-  Result ref = ewald_reference();
-  Result r = kifmm("1e-12", "order 14 leaf 40");
-  EXPECT_LE(relative_force_error(r.f, ref.f), 1e-10);
-  EXPECT_LE(rel(r.energy, ref.energy), 1e-10);
-  // fix deform during a run (box 1.3 -> 1.5): the energies along the run follow the box
-  // (no time integration: the atoms only follow the affine remap of the box)
-  commands("fix grow all deform 1 x final 0 1.5 y final 0 1.5 z final 0 1.5 remap x\n"
-           "thermo 10\nrun 20 post no\nunfix grow");
-  EXPECT_NEAR(box_length(), 1.5, 1e-12);
-  // fix deform changes the box at the end of a step: the energy of step 20 belongs to the box
-  // of step 19 (L = 1.49); the configuration is affine in L and E ~ 1/L
-  const double e_run = thermo("elong") * (1.3 + 0.2 * 19.0 / 20.0) / 1.5;
-  Result ref2 = ewald_reference();
-  if (rank() == 0) std::printf("  after fix deform: energy %.2e\n", rel(e_run, ref2.energy));
-  EXPECT_LE(rel(e_run, ref2.energy), 1e-10);
+  change_box_and_deform("order 14 leaf 40");
+}
+
+TEST_F(Periodic, GridFollowsChangeBoxAndFixDeform)
+{
+  change_box_and_deform("order 14 grid 4");
 }
 
 // ---------------------------------------------------------------- errors
@@ -449,6 +515,23 @@ TEST_F(Periodic, MixedPeriodicityIsAnError)
   load(uniform_cube(50, 54), "p p f");
   commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4");
   EXPECT_LAMMPS_ERROR(command("run 0"), "mixed periodicity \\(boundary p p f\\)");
+}
+
+TEST_F(Periodic, GridNeedsPeriodicBoundaries)
+{
+  load(uniform_cube(50, 56), "f f f");
+  commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4\nkspace_modify kifmm grid 4");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "grid 4: the single-level grid needs periodic boundaries");
+}
+
+TEST_F(Periodic, GridIsNotForYukawaAndItsValueIsChecked)
+{
+  load(uniform_cube(50, 56));
+  commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4\n"
+           "kspace_modify kifmm kernel yukawa 2.0 grid 4");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "grid 4: the single-level grid is for the coulomb and gravity kernels");
+  EXPECT_LAMMPS_ERROR(command("kspace_modify kifmm grid 2"), "grid 2 is out of range 3..32");
+  EXPECT_LAMMPS_ERROR(command("kspace_modify kifmm grid yes"), "grid 'yes' must be auto, no or an integer");
 }
 
 // Only the trace of the periodic virial is computed: the scalar pressure is exact (tested with

@@ -4,6 +4,7 @@
 #include "fmm_core.h"
 #include "interaction_lists.h"
 #include "kifmm.h"
+#include "m2l_fft.h"
 #include "octree.h"
 #include "periodic.h"
 #include "surface.h"
@@ -245,6 +246,92 @@ TreeCounts tree_counts(const Octree &tree, const InteractionLists &lists, const 
   return t;
 }
 
+// ---------------------------------------------------------------- periodic grid (cost_model.h)
+
+namespace {
+// Seconds per cell of the periodic single-level grid, in ns per order: produced by
+// `OMP_NUM_THREADS=1 ./bench/calibrate --grid-cost` (bench/calibrate.cpp; the point, pair and
+// entry terms are those of kCost), 2026-12-01, in brackets the RMS relative residual over the
+// grids with 8 to 1000 atoms per cell at N = 3e3, 1e4, 3e4 (the per-cell work grows slowly
+// with k: the convolution is O(log k) per cell, and the spectra leave the caches).
+struct GridRow {
+  int order;
+  double cell;
+};
+const GridRow kGridCost[] = {
+    {3, 2463},         // [0.175]
+    {4, 6190},         // [0.075]
+    {5, 1.872e+04},    // [0.133]
+    {6, 3.229e+04},    // [0.079]
+    {7, 4.153e+04},    // [0.086]
+    {8, 9.161e+04},    // [0.129]
+    {9, 1.958e+05},    // [0.127]
+    {10, 1.937e+05},   // [0.108]
+};
+}    // namespace
+
+TreeCounts uniform_grid_counts(std::size_t n, int k)
+{
+  TreeCounts t;
+  const double cells = (double) k * k * k, m = (double) n / cells;
+  t.near_pairs = 27 * cells * m * m / 2;
+  t.self_pairs = cells * m * m / 2;
+  t.entries = 14 * cells;
+  t.cells = cells;
+  return t;
+}
+
+TreeCounts grid_counts(std::size_t n, const double *xyz, const double center[3], double half_width, int k)
+{
+  const int kc = k * k * k;
+  const double w = 2 * half_width / k;
+  std::vector<double> occ(kc, 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    int a[3];
+    for (int d = 0; d < 3; ++d)
+      a[d] = std::min(k - 1, std::max(0, (int) std::floor((xyz[3 * i + d] - (center[d] - half_width)) / w)));
+    occ[(a[0] * k + a[1]) * k + a[2]] += 1;
+  }
+  TreeCounts t;
+  t.cells = kc;
+  t.entries = 14.0 * kc;
+  for (int b = 0; b < kc; ++b) {
+    if (occ[b] == 0) continue;
+    const int a[3] = {b / (k * k), (b / k) % k, b % k};
+    for (int o = 0; o < 27; ++o) {
+      const int c[3] = {(a[0] + o / 9 - 1 + k) % k, (a[1] + (o / 3) % 3 - 1 + k) % k, (a[2] + o % 3 - 1 + k) % k};
+      t.near_pairs += occ[b] * occ[(c[0] * k + c[1]) * k + c[2]] / 2;
+    }
+    t.self_pairs += occ[b] * occ[b] / 2;
+  }
+  return t;
+}
+
+double grid_cell_cost(int order)
+{
+  const GridRow *r = &kGridCost[0];
+  for (const GridRow &g : kGridCost)
+    if (g.order <= order) r = &g;
+  return 1e-9 * r->cell;
+}
+
+double modelled_grid_cost(int order, std::size_t n, const TreeCounts &t)
+{
+  const CostConstants c = cost_constants(order);
+  return c.point * (double) n + c.pair * (t.near_pairs + kSelfExtra * t.self_pairs) + c.entry * t.entries +
+      grid_cell_cost(order) * t.cells;
+}
+
+int max_grid_cells(int order)
+{
+  const int last = kGridCost[sizeof kGridCost / sizeof kGridCost[0] - 1].order;
+  if (order > last || order < 2) return 0;
+  const double per_cell = 16.0 * m2l_nfreq(order);    // bytes of kernel (and buffer) per cell
+  int k = 3;
+  while ((double) (k + 1) * (k + 1) * (k + 1) * per_cell <= 64e6) ++k;
+  return k;
+}
+
 TreeChoice choose_tree(int order, std::size_t n, bool periodic)
 {
   TreeChoice best{leaf_size_for_depth(n, 0), 0, modelled_cost(order, n, periodic, 0)};
@@ -337,7 +424,24 @@ TreeChoice choose_tree(const KernelSpec &kernel, const Options &options, std::si
     const TreeChoice c = model_leaf(pts, options, n, leaf);
     if (best.leaf_size == 0 || c.cost < best.cost) best = c;
   }
-  return best.leaf_size != 0 && best.cost < (1 - kChoiceMargin) * start.cost ? best : start;
+  TreeChoice tree = best.leaf_size != 0 && best.cost < (1 - kChoiceMargin) * start.cost ? best : start;
+  // periodic Laplace: the single-level grid of least modelled cost, unless the octree is
+  // modelled cheaper by the margin (the model underestimates the periodic octree at small N:
+  // 3e3 atoms, order 6, depth 2: modelled 0.0056 s, measured 0.0081 s, where the grid of 4^3
+  // cells is modelled 0.0057 s and measured 0.0047-0.0053 s; bench_periodic)
+  if (options.periodic && kernel.type == KernelType::Laplace) {
+    TreeChoice grid{tree.leaf_size, tree.depth, 0.0, 0};
+    for (int k = 3; k <= max_grid_cells(options.order) && (double) k * k * k <= (double) n; ++k) {
+      const double c = modelled_grid_cost(
+          options.order, n, grid_counts(n, pts.xyz, options.root_center, options.root_half_width, k));
+      if (grid.grid == 0 || c < grid.cost) {
+        grid.cost = c;
+        grid.grid = k;
+      }
+    }
+    if (grid.grid != 0 && (1 - kChoiceMargin) * grid.cost <= tree.cost) return grid;
+  }
+  return tree;
 }
 
 }    // namespace kifmm

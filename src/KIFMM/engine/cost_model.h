@@ -84,4 +84,19 @@ double self_pair_extra();
 TreeCounts actual_tree_counts(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz,
                               int leaf_size, int *depth = nullptr);
 
+// Periodic single-level grid of k^3 cells (periodic_grid.h, Laplace): near = every cell with
+// itself and its 26 neighbours (mutual), self = pairs inside one cell, entries = 14 per cell,
+// cells = k^3 (P2M, two surface FFTs, its share of the convolution over the cells, L2P),
+// translations = 0. cost = point * n + pair * (near + self_extra * self) + entry * entries +
+// grid_cell * cells: the octree's constants and one per-order constant per grid cell
+// (grid_cell_cost, fitted by `bench/calibrate --grid-cost`).
+TreeCounts uniform_grid_counts(std::size_t n, int k);
+// The same for points wrapped into the cell [center - h, center + h)^3 (actual occupancies).
+TreeCounts grid_counts(std::size_t n, const double *xyz, const double center[3], double half_width, int k);
+double grid_cell_cost(int order);    // seconds
+double modelled_grid_cost(int order, std::size_t n, const TreeCounts &counts);
+// Largest grid (cells per side) offered at this order: its kernels (periodic_grid.h) and the
+// convolution buffer are each at most 64 MB; 0 above the largest order with a fitted constant.
+int max_grid_cells(int order);
+
 }    // namespace kifmm

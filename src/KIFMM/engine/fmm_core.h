@@ -16,12 +16,14 @@
 #include "kernel_scaling.h"
 #include "kifmm.h"
 #include "m2l_fft.h"
+#include "mutual_tasks.h"
 #include "octree.h"
 #include "operator_cache.h"
 #include "operators.h"
 #include "p2p.h"
 #include "p2p_mutual.h"
 #include "periodic.h"
+#include "periodic_grid.h"
 #include "surface.h"
 
 #include <omp.h>
@@ -141,6 +143,13 @@ template <class K> class FmmEvaluator : public Evaluator {
   void periodic_far(std::size_t own_sources = SIZE_MAX);
   void periodic_near(bool want_pot);
   void periodic_m2l_top(int level);    // levels 1, 2: colleague slots of one parent summed
+  void periodic_background_moments(double quad, const double c[3], std::size_t own_sources);
+  void add_periodic_background(bool want_pot, const double c[3]);
+  // periodic single-level grid of opt_.periodic_grid^3 cells (periodic_grid.h, periodic_grid_core.h)
+  std::shared_ptr<const GridKernel> grid_kernel_;
+  std::vector<int> grid_src_begin_, grid_trg_begin_;    // per cell, sorted order (+ end)
+  void evaluate_grid(std::size_t ns, const double *sxyz, const double *sq, std::size_t nt, const double *txyz,
+                     double *pot, double *grad, bool same_points);
   // M2L layout of level l: source cells (children of a target parent's colleague) and target
   // cells (V non-empty) in slots of xhat_/yhat_ (sized here), and per parent of level l-1 the
   // spectra of its 8 children (xtab/ytab, nullptr where absent). False if no target.
@@ -594,8 +603,6 @@ std::size_t FmmEvaluator<K>::mutual_near(bool want_pot, const std::vector<Mutual
                                          double L)
 {
   const auto &cells = tree_.cells;
-  std::size_t zeros = 0;
-  const double no_shift[3] = {0, 0, 0};
   auto run = [&](int a, int b, const double *sh, bool self_pair) -> std::size_t {
     const Cell &A = cells[a], &B = cells[b];
     // positions and strengths by the source ranges, accumulators by the target ranges (the
@@ -612,42 +619,11 @@ std::size_t FmmEvaluator<K>::mutual_near(bool want_pot, const std::vector<Mutual
                            &tgx_[tj], &tgy_[tj], &tgz_[tj], sh, &z);
     return z;
   };
-  // One task per pair, created in the order self leaves, color 0, 1, ... with a dependence on
-  // each of its two leaves: tasks that share a leaf run in creation order (the fixed
-  // per-target order), all others as soon as a thread is free (no barrier per color: on a
-  // loaded machine one descheduled thread would stall every round).
-  const int ns = (int) self.size(), np = (int) pairs.size();
-  std::vector<std::size_t> z(ns + np, 0);
-  std::vector<char> dep(cells.size());
-  char *d = dep.data();
-  std::size_t *zp = z.data();
-  (void) color_off;    // the pairs are stored by color
-  // The tasks are created inside an explicit parent task, not by the implicit task of the
-  // `single`: libgomp (GCC 12) never frees the dependence table of an implicit task of a pooled
-  // thread, which leaked ~8 kB per evaluation whenever a non-master thread ran the `single`
-  // (measured with LeakSanitizer: 29 blocks after 400 evaluations); an explicit task's table is
-  // freed when it ends.
-#pragma omp parallel
-#pragma omp single
-#pragma omp task
-  {
-    for (int i = 0; i < ns; ++i) {
-#pragma omp task depend(inout : d[self[i]]) firstprivate(i)
-      zp[i] = run(self[i], self[i], no_shift, true);
-    }
-    for (int e = 0; e < np; ++e) {
-      const int a = pairs[e].a, b = pairs[e].b;
-#pragma omp task depend(inout : d[a], d[b]) firstprivate(e)
-      {
-        const MutualPair &pr = pairs[e];
-        const double sh[3] = {pr.shift[0] * L, pr.shift[1] * L, pr.shift[2] * L};
-        zp[ns + e] = run(pr.a, pr.b, sh, false);
-      }
-    }
-#pragma omp taskwait
-  }
-  for (std::size_t v : z) zeros += v;
-  return zeros;
+  (void) color_off;    // the pairs are stored by color; run_mutual_tasks keeps that order per leaf
+  return run_mutual_tasks(cells.size(), self, pairs, [&](int a, int b, const signed char *s, bool self_pair) {
+    const double sh[3] = {s[0] * L, s[1] * L, s[2] * L};
+    return run(a, b, sh, self_pair);
+  });
 }
 
 template <class K>
@@ -669,6 +645,11 @@ void FmmEvaluator<K>::evaluate(std::size_t n_src, const double *src_xyz, const d
   if (ns == 0) return;
   const bool same_arrays = src_xyz == trg_xyz;
   if (opt_.periodic) periodic_wrap(ns, sxyz, n_trg, trg_xyz);
+  if (opt_.periodic && opt_.periodic_grid > 0) {
+    evaluate_grid(ns, sxyz, sq, n_trg, trg_xyz, pot, grad, same_arrays && ns == n_src && n_src == n_trg);
+    if (same_arrays && n_src == n_trg && stats_.coincident_pairs >= ns) stats_.coincident_pairs -= ns;
+    return;
+  }
   const RootBox root = evaluation_root(opt_.fixed_root, opt_.root_center, opt_.root_half_width,
                                        !level_independent_operators<K>(), ns, sxyz, n_trg, trg_xyz);
   build_octree(tree_, root, ns, sxyz, n_trg, trg_xyz, opt_.leaf_size, opt_.max_depth);
@@ -713,4 +694,5 @@ void FmmEvaluator<K>::evaluate(std::size_t n_src, const double *src_xyz, const d
 }    // namespace kifmm
 
 #include "periodic_core.h"       // periodic passes (member templates)
+#include "periodic_grid_core.h"  // periodic single-level grid (member template)
 #include "distributed_core.h"    // distributed evaluation (member template)

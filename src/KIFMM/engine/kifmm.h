@@ -38,6 +38,9 @@ struct Options {
   // into it. Laplace: tin-foil Ewald sum (k = 0 omitted) with a uniform neutralizing background
   // for a net charge; Yukawa: the lattice sum. Needs fixed_root (see set_root, periodic.h).
   bool periodic = false;
+  // Periodic only: 0 = octree; k >= 3 = one level of k^3 cells instead (periodic_grid.h;
+  // Laplace; serial evaluate() only, evaluate_distributed uses the octree).
+  int periodic_grid = 0;
   // Distributed evaluation: level of the global top tree (0 = from the number of ranks,
   // see distributed.h).
   int top_level = 0;
@@ -117,6 +120,8 @@ struct TreeChoice {
   int leaf_size;
   int depth;          // depth of the tree over uniform points (clustered points go deeper)
   double cost;        // modelled CPU seconds of one evaluation (one thread)
+  int grid = 0;       // periodic: cells per side of the single-level grid (Options::periodic_grid)
+                      // that is cheaper than the octree; 0 = the octree (leaf_size, depth)
 };
 TreeChoice choose_tree(int order, std::size_t n, bool periodic);
 
@@ -130,6 +135,10 @@ TreeChoice choose_tree(int order, std::size_t n, bool periodic);
 // residuals are 4-8 %). depth: of the actual tree. Deterministic for the same points; one
 // process's points only, so the distributed evaluation (each rank holds its own atoms) keeps
 // the uniform choice above. Costs a few tree builds (bench_engine --tree-choice: "choice s").
+// Periodic Laplace: also the single-level grids of k^3 cells, k = 3 .. max_grid_cells(order)
+// (cost_model.h, counts of the actual cell occupancies); a grid is returned (grid = k, with
+// the octree's leaf size and depth kept for the distributed evaluation) when it is modelled
+// cheaper than the chosen octree by the same margin.
 TreeChoice choose_tree(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz);
 
 // Modelled cost and depth of the actual tree of these points with this leaf size (as above).

@@ -16,12 +16,13 @@
 
 namespace kifmm {
 
-namespace {
 std::mutex &fftw_mutex()
 {
   static std::mutex m;
   return m;
 }
+
+namespace {
 
 struct OffsetTable {
   int idx[343];

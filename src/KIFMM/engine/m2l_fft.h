@@ -14,10 +14,14 @@
 
 #include "kernel_scaling.h"
 
+#include <mutex>
 #include <utility>
 #include <vector>
 
 namespace kifmm {
+
+// FFTW's planner is not thread-safe: every plan creation/destruction in the engine holds this.
+std::mutex &fftw_mutex();
 
 inline int m2l_grid_n(int p) { return 2 * p; }
 // Complex frequencies of the r2c transform, and the storage stride (padded to 16).

@@ -104,19 +104,41 @@ template <class K> void FmmEvaluator<K>::periodic_far(std::size_t own_sources)
   has_local_[0] = 1;
   // Laplace: the lattice operator's quadratic part (2pi/3V) sum_j q_j |x - y_j|^2, from the
   // moments of the sources about the cell center (applied at the targets in periodic_near)
-  periodic_quad_ = lattice_->quad / (h0 * h0 * h0);
+  periodic_background_moments(lattice_->quad / (h0 * h0 * h0), tree_.root.center, own_sources);
+}
+
+// Laplace: the quadratic part quad sum_j q_j |x - y_j|^2 of the lattice sum (periodic.h), from
+// the moments of the sources about the cell center c (sorted sources with input index below
+// own_sources; distributed: this rank's own, the moments are then summed over ranks)
+template <class K>
+void FmmEvaluator<K>::periodic_background_moments(double quad, const double c[3], std::size_t own_sources)
+{
+  periodic_quad_ = quad;
   for (double &v : periodic_moments_) v = 0.0;
-  if (periodic_quad_ != 0.0) {
-    const double *c = tree_.root.center;
-    for (std::size_t j = 0; j < sq_.size(); ++j) {
-      if (tree_.src_order[j] >= own_sources) continue;
-      const double dx = sx_[j] - c[0], dy = sy_[j] - c[1], dz = sz_[j] - c[2];
-      periodic_moments_[0] += sq_[j];
-      periodic_moments_[1] += sq_[j] * dx;
-      periodic_moments_[2] += sq_[j] * dy;
-      periodic_moments_[3] += sq_[j] * dz;
-      periodic_moments_[4] += sq_[j] * (dx * dx + dy * dy + dz * dz);
-    }
+  if (periodic_quad_ == 0.0) return;
+  for (std::size_t j = 0; j < sq_.size(); ++j) {
+    if (tree_.src_order[j] >= own_sources) continue;
+    const double dx = sx_[j] - c[0], dy = sy_[j] - c[1], dz = sz_[j] - c[2];
+    periodic_moments_[0] += sq_[j];
+    periodic_moments_[1] += sq_[j] * dx;
+    periodic_moments_[2] += sq_[j] * dy;
+    periodic_moments_[3] += sq_[j] * dz;
+    periodic_moments_[4] += sq_[j] * (dx * dx + dy * dy + dz * dz);
+  }
+}
+
+template <class K> void FmmEvaluator<K>::add_periodic_background(bool want_pot, const double c[3])
+{
+  if (periodic_quad_ == 0.0) return;
+  // a sum_j q_j |x - y_j|^2 = a (Q |x-c|^2 - 2 (x-c).D + S2); gradient 2a (Q (x-c) - D)
+  const double a = periodic_quad_, *m = periodic_moments_;
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < tp_.size(); ++i) {
+    const double dx = tx_[i] - c[0], dy = ty_[i] - c[1], dz = tz_[i] - c[2];
+    if (want_pot) tp_[i] += a * (m[0] * (dx * dx + dy * dy + dz * dz) - 2 * (dx * m[1] + dy * m[2] + dz * m[3]) + m[4]);
+    tgx_[i] += 2 * a * (m[0] * dx - m[1]);
+    tgy_[i] += 2 * a * (m[0] * dy - m[2]);
+    tgz_[i] += 2 * a * (m[0] * dz - m[3]);
   }
 }
 
@@ -345,18 +367,7 @@ template <class K> void FmmEvaluator<K>::periodic_near(bool want_pot)
     }
   }
   stats_.t_p2p += omp_get_wtime() - t_begin;    // near field of the images (and mutual U)
-  if (periodic_quad_ != 0.0) {
-    // a sum_j q_j |x - y_j|^2 = a (Q |x-c|^2 - 2 (x-c).D + S2); gradient 2a (Q (x-c) - D)
-    const double a = periodic_quad_, *m = periodic_moments_, *c = tree_.root.center;
-#pragma omp parallel for schedule(static)
-    for (std::size_t i = 0; i < tp_.size(); ++i) {
-      const double dx = tx_[i] - c[0], dy = ty_[i] - c[1], dz = tz_[i] - c[2];
-      if (want_pot) tp_[i] += a * (m[0] * (dx * dx + dy * dy + dz * dz) - 2 * (dx * m[1] + dy * m[2] + dz * m[3]) + m[4]);
-      tgx_[i] += 2 * a * (m[0] * dx - m[1]);
-      tgy_[i] += 2 * a * (m[0] * dy - m[2]);
-      tgz_[i] += 2 * a * (m[0] * dz - m[3]);
-    }
-  }
+  add_periodic_background(want_pot, tree_.root.center);
 }
 
 }    // namespace kifmm

@@ -1,0 +1,85 @@
+// Ewald split of the lattice sum of the unit cell (half-width 1, period 2) for the Laplace
+// (tin-foil, k = 0 omitted, uniform background) and Yukawa kernels: real-space terms with
+// erfc, reciprocal weights, background constant (internal to periodic.cpp and
+// periodic_grid.cpp).
+#pragma once
+
+#include "kifmm.h"
+
+#include <cmath>
+
+namespace kifmm::ewald {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kSqrtPi = 1.77245385090551602729;
+constexpr double kPeriod = 2.0;                    // unit cell: half-width 1
+constexpr double kVolume = 8.0;
+constexpr double kRealCut = 2.3;                   // Ewald real-space terms beyond: < exp(-47)
+
+// Ewald split (or direct image sum) of the unit-cell lattice sum of one kernel.
+struct Split {
+  bool yukawa = false, direct = false;
+  double kappa = 0, alpha = 3.0, a = 0;    // a = kappa / (2 alpha)
+  int nreal = 2, kmax = 13;
+
+  explicit Split(const KernelSpec &k)
+  {
+    yukawa = k.type == KernelType::Yukawa;
+    kappa = yukawa ? k.kappa : 0.0;
+    // images beyond |n| = 2 are > 3.9 away: exp(-kappa 3.9) < 1e-17 for kappa >= 10
+    direct = yukawa && kappa >= 10.0;
+    a = kappa / (2 * alpha);
+  }
+  double bare(double r) const { return yukawa ? std::exp(-kappa * r) / r : 1.0 / r; }
+  // real-space term phi(r) and F = phi'(r)/r; reg = phi minus the bare kernel
+  void real(double r, bool reg, double &v, double &F) const
+  {
+    if (direct) {    // only used with reg = false
+      const double e = std::exp(-kappa * r);
+      v = e / r;
+      F = -e * (1 + kappa * r) / (r * r * r);
+      return;
+    }
+    const double ar = alpha * r;
+    const double gauss = (2 * alpha / kSqrtPi) * std::exp(-ar * ar - a * a);
+    if (!yukawa) {
+      if (reg) {
+        v = -std::erf(ar) / r;
+        F = (std::erf(ar) / (r * r) - gauss / r) / r;
+      } else {
+        v = std::erfc(ar) / r;
+        F = (-std::erfc(ar) / (r * r) - gauss / r) / r;
+      }
+      return;
+    }
+    const double A = std::exp(kappa * r) * std::erfc(ar + a);
+    if (reg) {
+      const double C = std::exp(-kappa * r) * std::erfc(a - ar);
+      v = (A - C) / (2 * r);
+      F = ((kappa * (A + C) - 2 * gauss) / (2 * r) - (A - C) / (2 * r * r)) / r;
+    } else {
+      const double B = std::exp(-kappa * r) * std::erfc(ar - a);
+      v = (A + B) / (2 * r);
+      F = ((kappa * (A - B) - 2 * gauss) / (2 * r) - (A + B) / (2 * r * r)) / r;
+    }
+  }
+  // limit of the regular n = 0 term at r = 0
+  double reg0() const
+  {
+    if (direct) return 0.0;
+    if (!yukawa) return -2 * alpha / kSqrtPi;
+    return kappa * std::erfc(a) - (2 * alpha / kSqrtPi) * std::exp(-a * a);
+  }
+  // reciprocal weight of k = pi m (m integer vector), m2 = |m|^2
+  double weight(int m2) const
+  {
+    if (direct) return 0.0;
+    const double k2 = kPi * kPi * m2;
+    if (!yukawa) return m2 == 0 ? 0.0 : (4 * kPi / kVolume) * std::exp(-k2 / (4 * alpha * alpha)) / k2;
+    const double q2 = k2 + kappa * kappa;
+    return (4 * kPi / kVolume) * std::exp(-q2 / (4 * alpha * alpha)) / q2;
+  }
+  double background() const { return (yukawa || direct) ? 0.0 : -kPi / (kVolume * alpha * alpha); }
+};
+
+}    // namespace kifmm::ewald

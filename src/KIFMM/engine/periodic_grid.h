@@ -1,0 +1,58 @@
+// Periodic (p p p) evaluation on ONE level of k^3 cubic cells (k >= 3 per side), the cheaper
+// choice for small N (about 1e3 .. 3e4 atoms, see cost_model.h): the octree's 4 or 8 leaves
+// per side leave either too many atoms per leaf (near field) or too many M2L translations;
+// 5, 6, 7 ... per side fill the gap. Laplace only.
+//   near field : every cell with itself and its 26 neighbours (images included; k >= 3 makes
+//                them 26 distinct cells), pair by pair for both sides when sources = targets;
+//   far field  : ALL other images of all cells through one convolution. For a target cell t
+//                and a source cell s, every image s + k n that is not adjacent to t
+//                (|s + k n - t|_inf >= 2) acts through the ordinary M2L (its equivalent
+//                surface is well separated from t's check surface), and these images are
+//                summed into one kernel per offset class D = t - s mod k:
+//                  K_D(r) = G_per(r) - sum_{n: |D + k n|_inf <= 1} G(r + 2k n h) - quad |r|^2
+//                sampled on the M2L lattice (G_per: the Ewald sum of the cell, tin-foil, with
+//                the background; quad |r|^2 its non-harmonic part, added exactly at the
+//                targets from the moments as in the octree path). Check(t) = sum_s K_{t-s}
+//                (*) equiv(s) is a circular convolution over the cells: a DFT of size k^3 per
+//                surface frequency, so the M2L costs O(k^3 log k) per frequency instead of
+//                O(k^6);
+//   P2M / L2P  : the octree's operators at the cell size.
+// No M2M, L2L or root operator: the far images are all in K_D.
+#pragma once
+
+#include <complex>
+#include <cstddef>
+#include <memory>
+#include <vector>
+
+namespace kifmm {
+
+// Kernels of the unit grid (cell half-width 1, period 2k) for order p; the physical operator
+// at cell half-width h is K / h (Laplace is homogeneous). hat[w * nfreq + f]: cell frequency w
+// (DFT of the offset class D = t - s mod k), surface frequency f (r2c of the (2p)^3 lattice,
+// f = nraw .. nfreq-1 zero), divided by (2p)^3 k^3 (normalizes both inverse transforms).
+struct GridKernel {
+  int k = 0, p = 0, nraw = 0, nfreq = 0;
+  std::vector<std::complex<double>> hat;
+  double quad = 0.0;    // quadratic part of G_per in unit-grid coordinates: 2 pi / (3 (2k)^3)
+  void *plan_fwd = nullptr, *plan_bwd = nullptr;    // DFTs over the cells of 16 frequency rows
+  GridKernel() = default;
+  GridKernel(const GridKernel &) = delete;
+  GridKernel &operator=(const GridKernel &) = delete;
+  ~GridKernel();
+  std::size_t bytes() const { return hat.size() * sizeof(std::complex<double>); }
+};
+
+// Cached per (k, p) in the process (a few tenths of a second to compute at p = 6, k = 5).
+std::shared_ptr<const GridKernel> periodic_grid_kernel(int k, int p);
+
+// In place on the frequencies [f0, f1) (multiples of 16) of z[cell * nfreq + f] (cell-major,
+// so that each cell's spectrum is contiguous): z <- IDFT(hat .* DFT(z)) over the cells.
+// Thread-safe (frequencies are independent).
+void grid_convolve(const GridKernel &g, std::complex<double> *z, int f0, int f1);
+
+// Allocation with FFTW's alignment (the plans are made for it).
+std::complex<double> *grid_alloc(std::size_t n);
+void grid_free(std::complex<double> *z);
+
+}    // namespace kifmm

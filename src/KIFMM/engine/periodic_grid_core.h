@@ -1,0 +1,301 @@
+// Periodic evaluation on one level of k^3 cells: FmmEvaluator<K>::evaluate_grid (included at
+// the end of fmm_core.h; the method is described in periodic_grid.h). Points are already
+// wrapped into the cell (the fixed root). Passes: bin -> P2M -> surface FFTs -> convolution
+// over the cells (all far images) -> inverse FFTs -> check-to-equivalent -> L2P; near field
+// (each cell with itself and its 26 neighbours, mutual when sources = targets); Laplace
+// background term.
+#pragma once
+
+#include "fmm_core.h"
+#include "periodic_grid.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <type_traits>
+
+namespace kifmm {
+
+template <class K>
+void FmmEvaluator<K>::evaluate_grid(std::size_t ns, const double *sxyz, const double *sq, std::size_t nt,
+                                    const double *txyz, double *pot, double *grad, bool same_points)
+{
+  if constexpr (!std::is_same_v<K, LaplaceKernel>) {
+    throw std::invalid_argument("kifmm: the periodic grid (Options::periodic_grid) is for the Laplace kernel");
+  } else {
+    const int k = opt_.periodic_grid;
+    if (k < 3) throw std::invalid_argument("kifmm: Options::periodic_grid needs at least 3 cells per side");
+    const int kc = k * k * k;
+    const double H = opt_.root_half_width, w = 2.0 * H / k, h = 0.5 * w;
+    const double *c = opt_.root_center;
+    double t0 = omp_get_wtime();
+    // ---- bin the points by cell (counting sort, stable): the sorted order replaces the octree's
+    tree_ = Octree{};
+    tree_.root.center[0] = c[0];
+    tree_.root.center[1] = c[1];
+    tree_.root.center[2] = c[2];
+    tree_.root.half_width = H;
+    auto cell_of = [&](const double *x) {
+      int a[3];
+      for (int d = 0; d < 3; ++d) a[d] = std::min(k - 1, std::max(0, (int) std::floor((x[d] - (c[d] - H)) / w)));
+      return (a[0] * k + a[1]) * k + a[2];
+    };
+    auto bin = [&](std::size_t n, const double *xyz, std::vector<int> &begin, std::vector<uint32_t> &order) {
+      std::vector<int> cell(n);
+      begin.assign(kc + 1, 0);
+      for (std::size_t i = 0; i < n; ++i) ++begin[(cell[i] = cell_of(xyz + 3 * i)) + 1];
+      for (int b = 0; b < kc; ++b) begin[b + 1] += begin[b];
+      std::vector<int> next(begin.begin(), begin.end() - 1);
+      order.resize(n);
+      for (std::size_t i = 0; i < n; ++i) order[next[cell[i]]++] = (uint32_t) i;
+    };
+    bin(ns, sxyz, grid_src_begin_, tree_.src_order);
+    if (same_points) {
+      grid_trg_begin_ = grid_src_begin_;
+      tree_.trg_order = tree_.src_order;
+    } else {
+      bin(nt, txyz, grid_trg_begin_, tree_.trg_order);
+    }
+    sorted_copies(ns, sxyz, sq, nt, txyz);
+    const std::vector<int> &sb = grid_src_begin_, &tb = grid_trg_begin_;
+    auto center = [&](int b, double ctr[3]) {
+      const int a[3] = {b / (k * k), (b / k) % k, b % k};
+      for (int d = 0; d < 3; ++d) ctr[d] = c[d] - H + (a[d] + 0.5) * w;
+    };
+    double t1 = omp_get_wtime();
+    stats_.t_tree = t1 - t0;
+    stats_.depth = 0;
+    stats_.n_cells = stats_.n_leaves = kc;
+    // ---- operators of the cell size, and the grid kernels
+    double t_setup = 0, s = 1.0;
+    ops_.assign(1, get_operator_set(make_unit_kernel(k_, h, s), p_, opt_.cache_dir, &t_setup));
+    scale_.assign(1, s);
+    if (!fft_ || fft_->p() != p_) fft_ = std::make_unique<M2LTransform>(p_);
+    const double tg = omp_get_wtime();
+    grid_kernel_ = periodic_grid_kernel(k, p_);
+    stats_.t_precompute = t_setup + (omp_get_wtime() - tg);
+    stats_.operator_bytes = ops_[0]->bytes() + grid_kernel_->bytes();
+    const OperatorSet &op = *ops_[0];
+    const GridKernel &gk = *grid_kernel_;
+    const int nf = gk.nfreq;
+    up_equiv_.assign((std::size_t) kc * nsurf_, 0.0);
+    dn_check_.assign((std::size_t) kc * nsurf_, 0.0);
+    dn_equiv_.assign((std::size_t) kc * nsurf_, 0.0);
+    tp_.assign(nt, 0.0);
+    tgx_.assign(nt, 0.0);
+    tgy_.assign(nt, 0.0);
+    tgz_.assign(nt, 0.0);
+    double t2 = omp_get_wtime();
+    // ---- P2M (cells with sources), batched
+    constexpr int kBatch = 64;
+    const int nchunks = (kc + kBatch - 1) / kBatch;
+#pragma omp parallel
+    {
+      SurfacePoints surf;
+      std::vector<double> chk, eq;
+#pragma omp for schedule(dynamic, 1)
+      for (int ch = 0; ch < nchunks; ++ch) {
+        const int b0 = ch * kBatch, m = std::min(kc, b0 + kBatch) - b0;
+        chk.assign((std::size_t) nsurf_ * m, 0.0);
+        for (int j = 0; j < m; ++j) {
+          const int b = b0 + j;
+          if (sb[b + 1] == sb[b]) continue;
+          double ctr[3];
+          center(b, ctr);
+          box_surface(outer_, ctr, h, surf);
+          p2p<K, true, false, false>(k_, nsurf_, surf.x.data(), surf.y.data(), surf.z.data(), sb[b + 1] - sb[b],
+                                     &sx_[sb[b]], &sy_[sb[b]], &sz_[sb[b]], &sq_[sb[b]], &chk[(std::size_t) j * nsurf_],
+                                     nullptr, nullptr, nullptr);
+        }
+        eq.resize(chk.size());
+        apply_pinv_batch(op.uc2e_a, op.uc2e_b, nsurf_, op.rank, chk.data(), m, eq.data(), 1.0 / s);
+        std::copy(eq.begin(), eq.end(), up(b0));
+      }
+    }
+    double t3 = omp_get_wtime();
+    stats_.t_upward = t3 - t2;
+    // ---- M2L: surface spectra of all cells -> convolution over the cells -> check potentials
+    std::complex<double> *z = grid_alloc((std::size_t) nf * kc);
+    const int nblk = nf / 16;
+#pragma omp parallel
+    {
+      M2LTransform::Workspace ws(*fft_);
+      std::vector<double> chunk((std::size_t) nblk * 32);
+#pragma omp for schedule(static)
+      for (int b = 0; b < kc; ++b) {
+        std::complex<double> *zb = z + (std::size_t) b * nf;
+        if (sb[b + 1] == sb[b]) {
+          std::fill(zb, zb + nf, std::complex<double>(0.0));
+          continue;
+        }
+        fft_->forward(up(b), chunk.data(), 32, ws);
+        for (int f = 0; f < nf; ++f)
+          zb[f] = std::complex<double>(chunk[(f / 16) * 32 + f % 16], chunk[(f / 16) * 32 + 16 + f % 16]);
+      }
+#pragma omp for schedule(dynamic, 1)
+      for (int blk = 0; blk < nblk; ++blk) grid_convolve(gk, z, 16 * blk, 16 * blk + 16);
+#pragma omp for schedule(static)
+      for (int b = 0; b < kc; ++b) {
+        if (tb[b + 1] == tb[b]) continue;
+        for (int f = 0; f < nf; ++f) {
+          const std::complex<double> v = z[(std::size_t) b * nf + f];
+          chunk[(f / 16) * 32 + f % 16] = v.real();
+          chunk[(f / 16) * 32 + 16 + f % 16] = v.imag();
+        }
+        fft_->inverse_add(chunk.data(), 32, dcheck(b), s, ws);
+      }
+    }
+    grid_free(z);
+    double t4 = omp_get_wtime();
+    stats_.t_m2l = t4 - t3;
+    // ---- check -> downward equivalent (batched), L2P
+#pragma omp parallel
+    {
+      SurfacePoints surf;
+      std::vector<double> eq;
+#pragma omp for schedule(dynamic, 1)
+      for (int ch = 0; ch < nchunks; ++ch) {
+        const int b0 = ch * kBatch, m = std::min(kc, b0 + kBatch) - b0;
+        eq.resize((std::size_t) nsurf_ * m);
+        apply_pinv_batch(op.dc2e_a, op.dc2e_b, nsurf_, op.rank, dcheck(b0), m, eq.data(), 1.0 / s);
+        std::copy(eq.begin(), eq.end(), dequiv(b0));
+        for (int b = b0; b < b0 + m; ++b) {
+          if (tb[b + 1] == tb[b]) continue;
+          double ctr[3];
+          center(b, ctr);
+          box_surface(outer_, ctr, h, surf);
+          const std::size_t t = tb[b];
+          p2p_pg<K, false>(k_, pot != nullptr, tb[b + 1] - tb[b], &tx_[t], &ty_[t], &tz_[t], nsurf_, surf.x.data(),
+                           surf.y.data(), surf.z.data(), dequiv(b), &tp_[t], &tgx_[t], &tgy_[t], &tgz_[t]);
+        }
+      }
+    }
+    double t5 = omp_get_wtime();
+    stats_.t_downward = t5 - t4;
+    // ---- near field: each cell with itself and its 26 neighbours (images: shift in {-1,0,1}^3)
+    const double L = 2.0 * H;
+    auto neighbour = [&](int b, int dx, int dy, int dz, signed char sh[3]) {
+      const int a[3] = {b / (k * k) + dx, (b / k) % k + dy, b % k + dz};
+      int w3[3];
+      for (int d = 0; d < 3; ++d) {
+        sh[d] = (signed char) (a[d] < 0 ? -1 : a[d] >= k ? 1 : 0);
+        w3[d] = a[d] - sh[d] * k;
+      }
+      return (w3[0] * k + w3[1]) * k + w3[2];
+    };
+    const bool want_pot = pot != nullptr;
+    std::size_t zeros = 0;
+    if (same_points) {    // pair by pair for both cells (13 of the 26 offsets)
+      std::vector<int> self;
+      std::vector<MutualPair> pairs;
+      for (int b = 0; b < kc; ++b) {
+        if (sb[b + 1] == sb[b]) continue;
+        self.push_back(b);
+        for (int o = 14; o < 27; ++o) {
+          MutualPair pr;
+          pr.a = b;
+          pr.b = neighbour(b, o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, pr.shift);
+          if (sb[pr.b + 1] > sb[pr.b]) pairs.push_back(pr);
+        }
+      }
+      stats_.mutual_pairs = pairs.size();
+      zeros = run_mutual_tasks(kc, self, pairs, [&](int a, int b, const signed char *sh, bool self_pair) {
+        const double d[3] = {sh[0] * L, sh[1] * L, sh[2] * L};
+        const std::size_t i0 = sb[a], j0 = sb[b], na = sb[a + 1] - sb[a], nb = sb[b + 1] - sb[b];
+        std::size_t z0 = 0;
+        if (want_pot)
+          p2p_mutual<K, true>(k_, self_pair, na, &sx_[i0], &sy_[i0], &sz_[i0], &sq_[i0], &tp_[i0], &tgx_[i0],
+                              &tgy_[i0], &tgz_[i0], nb, &sx_[j0], &sy_[j0], &sz_[j0], &sq_[j0], &tp_[j0], &tgx_[j0],
+                              &tgy_[j0], &tgz_[j0], d, &z0);
+        else
+          p2p_mutual<K, false>(k_, self_pair, na, &sx_[i0], &sy_[i0], &sz_[i0], &sq_[i0], &tp_[i0], &tgx_[i0],
+                               &tgy_[i0], &tgz_[i0], nb, &sx_[j0], &sy_[j0], &sz_[j0], &sq_[j0], &tp_[j0], &tgx_[j0],
+                               &tgy_[j0], &tgz_[j0], d, &z0);
+        return z0;
+      });
+    } else {    // one-sided: targets moved by -shift L see the sources of the image at +shift L
+      std::vector<std::size_t> zc(kc, 0);
+#pragma omp parallel
+      {
+        std::vector<double> x, y, zz;
+#pragma omp for schedule(dynamic, 1)
+        for (int b = 0; b < kc; ++b) {
+          const std::size_t t = tb[b], n = tb[b + 1] - tb[b];
+          if (n == 0) continue;
+          x.resize(n);
+          y.resize(n);
+          zz.resize(n);
+          for (int o = 0; o < 27; ++o) {
+            signed char sh[3];
+            const int a = neighbour(b, o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, sh);
+            for (std::size_t i = 0; i < n; ++i) {
+              x[i] = tx_[t + i] - sh[0] * L;
+              y[i] = ty_[t + i] - sh[1] * L;
+              zz[i] = tz_[t + i] - sh[2] * L;
+            }
+            p2p_pg<K, true>(k_, want_pot, n, x.data(), y.data(), zz.data(), sb[a + 1] - sb[a], &sx_[sb[a]],
+                            &sy_[sb[a]], &sz_[sb[a]], &sq_[sb[a]], &tp_[t], &tgx_[t], &tgy_[t], &tgz_[t], &zc[b]);
+          }
+        }
+      }
+      for (std::size_t v : zc) zeros += v;
+    }
+    stats_.coincident_pairs = zeros;
+    stats_.t_p2p = omp_get_wtime() - t5;
+    // ---- Laplace background (non-harmonic part of G_per), exact from the moments
+    const double quad = gk.quad / (h * h * h);
+    periodic_background_moments(quad, c, SIZE_MAX);
+    add_periodic_background(want_pot, c);
+    // The kernels subtract quad |r|^2 at the separation r of the class representative (the
+    // image of the source cell nearest to the target cell, r = x - y + L m with m in
+    // {-1,0,1}^3 per cell pair), the moments above add it back at x - y: add the difference
+    // quad (2 L m.(x - y) + L^2 |m|^2) = quad (2 L (alpha.x - beta) + L^2 gamma) with, per
+    // target cell, alpha_d = sum_s m_d Q_s, beta = sum_s m.P_s, gamma = sum_s |m|^2 Q_s (Q_s,
+    // P_s: charge and dipole of source cell s). m_d depends on the cells' indices along axis d
+    // only: the sums are over the per-axis marginals of Q and P (O(k^2) per axis).
+    std::vector<double> Qa(3 * (std::size_t) k, 0.0), Pa(3 * (std::size_t) k, 0.0);
+    for (int b = 0; b < kc; ++b) {
+      const int sa[3] = {b / (k * k), (b / k) % k, b % k};
+      for (int j = sb[b]; j < sb[b + 1]; ++j) {
+        const double y[3] = {sx_[j] - c[0], sy_[j] - c[1], sz_[j] - c[2]};
+        for (int d = 0; d < 3; ++d) {
+          Qa[d * k + sa[d]] += sq_[j];
+          Pa[d * k + sa[d]] += sq_[j] * y[d];
+        }
+      }
+    }
+    auto wrap_of = [k](int t, int s) {    // m of the class representative in (-k/2, k/2]
+      const int d = t - s, rep = ((d % k) + k) % k, D = 2 * rep <= k ? rep : rep - k;
+      return (D - d) / k;
+    };
+    std::vector<double> A(3 * (std::size_t) k, 0.0), B(3 * (std::size_t) k, 0.0), C(3 * (std::size_t) k, 0.0);
+    for (int d = 0; d < 3; ++d)
+      for (int t = 0; t < k; ++t)
+        for (int s2 = 0; s2 < k; ++s2) {
+          const int m = wrap_of(t, s2);
+          A[d * k + t] += m * Qa[d * k + s2];
+          B[d * k + t] += m * Pa[d * k + s2];
+          C[d * k + t] += m * m * Qa[d * k + s2];
+        }
+#pragma omp parallel for schedule(static)
+    for (int t = 0; t < kc; ++t) {
+      const int ta[3] = {t / (k * k), (t / k) % k, t % k};
+      const double alpha[3] = {A[ta[0]], A[k + ta[1]], A[2 * k + ta[2]]};
+      const double beta = B[ta[0]] + B[k + ta[1]] + B[2 * k + ta[2]];
+      const double gamma = C[ta[0]] + C[k + ta[1]] + C[2 * k + ta[2]];
+      for (int i = tb[t]; i < tb[t + 1]; ++i) {
+        const double x[3] = {tx_[i] - c[0], ty_[i] - c[1], tz_[i] - c[2]};
+        if (want_pot)
+          tp_[i] += quad * (2 * L * (alpha[0] * x[0] + alpha[1] * x[1] + alpha[2] * x[2] - beta) + L * L * gamma);
+        tgx_[i] += 2 * quad * L * alpha[0];
+        tgy_[i] += 2 * quad * L * alpha[1];
+        tgz_[i] += 2 * quad * L * alpha[2];
+      }
+    }
+    results_to_input_order(nt, pot, grad);
+    stats_.tree_bytes = sizeof(double) * (up_equiv_.size() + dn_check_.size() + dn_equiv_.size() + sx_.size() * 4 +
+                                          tx_.size() * 7);
+  }
+}
+
+}    // namespace kifmm

@@ -1,0 +1,249 @@
+// Periodic single-level grid (periodic_grid.h): against the Ewald reference sum and against
+// the periodic octree, mutual against one-sided near field, background term, wrapping,
+// coincident points, threads, the choice of the cost model, bad input.
+#include "periodic.h"
+
+#include "cost_model.h"
+#include "fmm_core.h"
+#include "test_util.h"
+
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <stdexcept>
+
+using kifmm::KernelSpec;
+using namespace kifmm_test;
+
+namespace {
+
+kifmm::Options grid_opts(int order, int k, double h = 1.0, const double c[3] = nullptr)
+{
+  kifmm::Options o;
+  o.order = order;
+  o.fixed_root = true;
+  o.periodic = true;
+  o.periodic_grid = k;
+  o.root_half_width = h;
+  if (c)
+    for (int d = 0; d < 3; ++d) o.root_center[d] = c[d];
+  return o;
+}
+
+struct Result {
+  std::vector<double> pot, grad;
+  kifmm::Stats stats;
+};
+
+Result evaluate(const kifmm::Options &o, const Points &p, const Points *targets = nullptr,
+                const KernelSpec &k = KernelSpec{})
+{
+  const Points &t = targets ? *targets : p;
+  Result r{std::vector<double>(t.size()), std::vector<double>(3 * t.size()), {}};
+  auto ev = kifmm::make_evaluator(k, o);
+  ev->evaluate(p.size(), p.xyz.data(), p.q.data(), t.size(), targets ? t.xyz.data() : p.xyz.data(), r.pot.data(),
+               r.grad.data());
+  r.stats = ev->stats();
+  return r;
+}
+
+Reference ewald(const kifmm::Options &o, const Points &p)
+{
+  const std::size_t n = p.size();
+  Reference r{std::vector<double>(n), std::vector<double>(3 * n)};
+  kifmm::periodic_direct_sum(KernelSpec{}, o.root_center, o.root_half_width, n, p.xyz.data(), p.q.data(), n,
+                             p.xyz.data(), r.pot.data(), r.grad.data());
+  return r;
+}
+
+double max_abs_diff(const std::vector<double> &a, const std::vector<double> &b)
+{
+  double m = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) m = std::max(m, std::abs(a[i] - b[i]));
+  return m;
+}
+
+}    // namespace
+
+TEST(PeriodicGrid, NeutralMatchesEwaldAndConvergesWithOrder)
+{
+  Points p = neutral(uniform_cube(3000, 31));
+  const Reference ref = ewald(grid_opts(4, 3), p);
+  for (int k : {3, 5, 8}) {
+    double prev = 1;
+    for (int order : {4, 6, 8, 10, 12}) {
+      const Result r = evaluate(grid_opts(order, k), p);
+      const double ep = rel_l2(r.pot, ref.pot), eg = rel_l2(r.grad, ref.grad);
+      std::printf("  grid %d^3 p=%2d: pot %.2e grad %.2e\n", k, order, ep, eg);
+      EXPECT_LT(eg, order >= 12 ? 1e-9 : prev) << k << " " << order;
+      EXPECT_LT(ep, 10 * eg + 1e-12);
+      EXPECT_EQ(r.stats.n_leaves, (std::size_t) k * k * k);
+      prev = eg;
+    }
+  }
+}
+
+// A net charge (uniform background, as the octree path and Ewald), in a cell of half-width
+// 1.5 centered away from the origin, points given outside the cell (wrapped).
+TEST(PeriodicGrid, NonNeutralShiftedScaledCellWithOutsidePointsMatchesEwald)
+{
+  Points p = uniform_cube(2000, 32);
+  for (double &q : p.q) q += 0.3;
+  const double c[3] = {0.5, -2.0, 10.0};
+  for (std::size_t i = 0; i < p.size(); ++i)
+    for (int d = 0; d < 3; ++d) p.xyz[3 * i + d] = c[d] + 1.5 * p.xyz[3 * i + d] + (i % 3 == 0 ? 3.0 * (d - 1) : 0.0);
+  const Reference ref = ewald(grid_opts(4, 3, 1.5, c), p);
+  for (int order : {6, 12}) {
+    const Result r = evaluate(grid_opts(order, 4, 1.5, c), p);
+    const double ep = rel_l2(r.pot, ref.pot), eg = rel_l2(r.grad, ref.grad);
+    std::printf("  grid non-neutral p=%2d: pot %.2e grad %.2e\n", order, ep, eg);
+    EXPECT_LT(ep, order == 6 ? 1e-4 : 1e-9);
+    EXPECT_LT(eg, order == 6 ? 1e-4 : 1e-9);
+  }
+}
+
+// Hard cases: cancelling dipoles, and a dense cluster at the cell's corner whose near images
+// are across the faces (most cells empty, a few holding everything)
+TEST(PeriodicGrid, DipolesAndCornerClusterMatchEwald)
+{
+  Points d = dipoles(1500, 33);
+  Result r = evaluate(grid_opts(12, 5), d);
+  Reference ref = ewald(grid_opts(12, 5), d);
+  std::printf("  grid dipoles p=12: pot %.2e grad %.2e\n", rel_l2(r.pot, ref.pot), rel_l2(r.grad, ref.grad));
+  EXPECT_LT(rel_l2(r.grad, ref.grad), 1e-8);
+  Points c;
+  std::mt19937_64 g(5);
+  std::normal_distribution<double> nd(0.0, 0.03);
+  for (int i = 0; i < 3000; ++i) {
+    for (int k = 0; k < 3; ++k) c.xyz.push_back(0.97 + nd(g));
+    c.q.push_back(i % 2 ? 1.0 : -1.0);
+  }
+  r = evaluate(grid_opts(12, 6), c);
+  ref = ewald(grid_opts(12, 6), c);
+  std::printf("  grid corner cluster p=12: pot %.2e grad %.2e\n", rel_l2(r.pot, ref.pot), rel_l2(r.grad, ref.grad));
+  EXPECT_LT(rel_l2(r.grad, ref.grad), 1e-8);
+}
+
+// The grid and the octree are two discretizations of the same sum: equal at high order
+TEST(PeriodicGrid, EqualsThePeriodicOctreeAtHighOrder)
+{
+  Points p = neutral(uniform_cube(4000, 34));
+  kifmm::Options oct = grid_opts(13, 0);
+  oct.leaf_size = 64;
+  const Result a = evaluate(grid_opts(13, 7), p), b = evaluate(oct, p);
+  EXPECT_GT(b.stats.depth, 0);
+  EXPECT_LT(rel_l2(a.grad, b.grad), 1e-9);
+  EXPECT_LT(rel_l2(a.pot, b.pot), 1e-9);
+}
+
+// Targets that are not the sources (zero-strength atoms leave the sources; separate target
+// arrays): the one-sided near field equals the mutual one
+TEST(PeriodicGrid, OneSidedNearFieldEqualsMutual)
+{
+  Points p = neutral(uniform_cube(2500, 35));
+  const Result mutual = evaluate(grid_opts(8, 5), p);
+  EXPECT_GT(mutual.stats.mutual_pairs, 0u);
+  Points copy = p;    // same coordinates, other arrays: sources != targets
+  const Result one = evaluate(grid_opts(8, 5), p, &copy);
+  EXPECT_EQ(one.stats.mutual_pairs, 0u);
+  EXPECT_LT(max_abs_diff(one.grad, mutual.grad), 1e-11 * (1 + max_abs_diff(mutual.grad, std::vector<double>(mutual.grad.size()))));
+  EXPECT_LT(rel_l2(one.pot, mutual.pot), 1e-13);
+  // zero-strength points: targets only
+  Points z = p;
+  for (std::size_t i = 0; i < z.size(); i += 4) z.q[i] = 0.0;
+  const Result rz = evaluate(grid_opts(10, 5), z);
+  const Reference ref = ewald(grid_opts(10, 5), z);
+  EXPECT_EQ(rz.stats.n_sources, z.size() - (z.size() + 3) / 4);
+  EXPECT_LT(rel_l2(rz.grad, ref.grad), 1e-7);
+}
+
+// Coincident points: finite results, the pairs at r = 0 counted and left out like the
+// reference (which skips only the bare n = 0 term)
+TEST(PeriodicGrid, CoincidentPointsAreFiniteAndCounted)
+{
+  Points p = neutral(uniform_cube(1000, 36));
+  for (int i = 0; i < 10; ++i) {    // 10 duplicates of the first 10 points
+    p.xyz.insert(p.xyz.end(), p.xyz.begin() + 3 * i, p.xyz.begin() + 3 * i + 3);
+    p.q.push_back(0.5);
+  }
+  const Result r = evaluate(grid_opts(10, 4), p);
+  for (double v : r.grad) ASSERT_TRUE(std::isfinite(v));
+  for (double v : r.pot) ASSERT_TRUE(std::isfinite(v));
+  EXPECT_EQ(r.stats.coincident_pairs, 20u);
+  const Reference ref = ewald(grid_opts(10, 4), p);
+  EXPECT_LT(rel_l2(r.grad, ref.grad), 1e-7);
+}
+
+// The result does not depend on the number of threads (fixed accumulation order per target)
+TEST(PeriodicGrid, ThreadIndependent)
+{
+  Points p = neutral(uniform_cube(3000, 37));
+  const int saved = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const Result a = evaluate(grid_opts(6, 6), p);
+  omp_set_num_threads(3);
+  const Result b = evaluate(grid_opts(6, 6), p);
+  omp_set_num_threads(saved);
+  EXPECT_EQ(max_abs_diff(a.grad, b.grad), 0.0);
+  EXPECT_EQ(max_abs_diff(a.pot, b.pot), 0.0);
+}
+
+// No potential asked: no potential work, same gradient
+TEST(PeriodicGrid, GradientOnlyEqualsFullEvaluation)
+{
+  Points p = neutral(uniform_cube(2000, 38));
+  const Result full = evaluate(grid_opts(6, 5), p);
+  std::vector<double> g(3 * p.size());
+  kifmm::make_evaluator(KernelSpec{}, grid_opts(6, 5))
+      ->evaluate(p.size(), p.xyz.data(), p.q.data(), p.size(), p.xyz.data(), nullptr, g.data());
+  EXPECT_LT(max_abs_diff(g, full.grad), 1e-12 * (1 + max_abs_diff(full.grad, std::vector<double>(g.size()))));
+}
+
+// The cost model picks a grid for uniform points at 1e4 (where it is measured faster than the
+// octree: bench_periodic), keeps the octree's leaf size for the distributed evaluation, never
+// offers a grid to Yukawa, and for a dense cluster in a large cell (a uniform grid would put
+// almost all points into a few cells) keeps the octree.
+TEST(PeriodicGrid, CostModelChoice)
+{
+  Points p = neutral(uniform_cube(10000, 39));
+  kifmm::Options o = grid_opts(6, 0);
+  const kifmm::TreeChoice c = kifmm::choose_tree(KernelSpec{}, o, p.size(), p.xyz.data());
+  EXPECT_GE(c.grid, 4);
+  EXPECT_LE(c.grid, kifmm::max_grid_cells(6));
+  // the octree's choice is kept beside it (distributed evaluation): a depth >= 2 tree
+  EXPECT_GE(c.depth, 2);
+  EXPECT_LT(c.leaf_size, (int) p.size());
+  const kifmm::TreeChoice y =
+      kifmm::choose_tree(KernelSpec{kifmm::KernelType::Yukawa, 2.0}, o, p.size(), p.xyz.data());
+  EXPECT_EQ(y.grid, 0);
+  Points c2;
+  std::mt19937_64 g(6);
+  std::normal_distribution<double> nd(0.0, 0.01);
+  for (int i = 0; i < 10000; ++i) {
+    for (int k = 0; k < 3; ++k) c2.xyz.push_back(0.3 + nd(g));
+    c2.q.push_back(i % 2 ? 1.0 : -1.0);
+  }
+  const kifmm::TreeChoice cc = kifmm::choose_tree(KernelSpec{}, o, c2.size(), c2.xyz.data());
+  EXPECT_EQ(cc.grid, 0);
+  EXPECT_GE(cc.depth, 4);
+  // uniform counts: 27 neighbour cells, pairs = 27 k^3 m^2 / 2
+  const kifmm::TreeCounts u = kifmm::uniform_grid_counts(8000, 5);
+  EXPECT_DOUBLE_EQ(u.near_pairs, 27.0 * 125 * 64.0 * 64.0 / 2);
+  EXPECT_DOUBLE_EQ(u.cells, 125.0);
+  EXPECT_EQ(kifmm::max_grid_cells(20), 0);
+}
+
+TEST(PeriodicGrid, BadOptionsThrow)
+{
+  Points p = neutral(uniform_cube(100, 40));
+  std::vector<double> g(3 * p.size());
+  EXPECT_THROW(kifmm::make_evaluator(KernelSpec{}, grid_opts(6, 2))
+                   ->evaluate(p.size(), p.xyz.data(), p.q.data(), p.size(), p.xyz.data(), nullptr, g.data()),
+               std::invalid_argument);
+  EXPECT_THROW(kifmm::make_evaluator(KernelSpec{kifmm::KernelType::Yukawa, 1.0}, grid_opts(6, 4))
+                   ->evaluate(p.size(), p.xyz.data(), p.q.data(), p.size(), p.xyz.data(), nullptr, g.data()),
+               std::invalid_argument);
+}

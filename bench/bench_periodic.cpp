@@ -6,13 +6,16 @@
 // Default: the trees kspace_style kifmm chooses on one rank from the points (choose_tree(kernel,
 // options, n, xyz): open, and periodic, which may be the single-level grid of periodic_grid.h)
 // and the periodic octree of that choice without the grid, timed alternately: the table gives
-// the periodic/open ratio of the choices and of the octree alone.
+// the periodic/open ratio of the choices and of the octree alone. --errors adds the relative
+// RMS gradient error of each (all points) against the octree at order 13 of the same boundary
+// (periodic: agrees with the Ewald sum to ~3e-11; open: the calibration's order-14 error is
+// 7e-12), computed once per row outside the timings.
 // With --leaves every leaf size is timed for both modes (alternately) and the fastest of each
 // mode is reported.
 // With --grids the periodic single-level grids of k^3 cells (periodic_grid.h) are timed beside
 // the open and periodic octree evaluations at the model's leaf size (all alternately).
 //   bench_periodic [--sizes 1e4,3e4,1e5] [--orders 4,5,6,7,8] [--leaves 64,128,256,512]
-//                  [--grids 4,5,6,7] [--reps 3] [--phases]
+//                  [--grids 4,5,6,7] [--reps 3] [--phases] [--errors]
 // --phases prints the engine's phase times (wall, single thread) of the best repetition.
 #include "cost_model.h"
 #include "fmm_core.h"
@@ -61,7 +64,7 @@ struct Timing {
 // Evaluators (mode k: periodic[k], leaf[k]; 0 = engine default) timed alternately (0, 1, ...,
 // 0, 1, ...) so that all see the same machine load; minimum CPU time of each.
 void time_modes(const bench::Points &p, int order, int nm, const bool *periodic, const int *leaf, int reps,
-                Timing *out, const int *grid = nullptr)
+                Timing *out, const int *grid = nullptr, std::vector<double> *grads = nullptr)
 {
   std::vector<std::unique_ptr<Evaluator>> ev(nm);
   const std::size_t n = p.size();
@@ -76,6 +79,7 @@ void time_modes(const bench::Points &p, int order, int nm, const bool *periodic,
     o.periodic_grid = grid ? grid[m] : 0;
     ev[m] = make_evaluator(KernelSpec{}, o);
     ev[m]->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());    // operators
+    if (grads) grads[m] = g;
     out[m] = Timing{};
     out[m].leaf = ev[m]->options().leaf_size;
   }
@@ -104,7 +108,7 @@ int main(int argc, char **argv)
 {
   std::vector<double> sizes{1e4, 3e4, 1e5}, orders{4, 5, 6, 7, 8}, leaves, grids;
   int reps = 3;
-  bool phases = false;
+  bool phases = false, errors = false;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--sizes") && i + 1 < argc) sizes = parse_list(argv[++i]);
     else if (!std::strcmp(argv[i], "--orders") && i + 1 < argc) orders = parse_list(argv[++i]);
@@ -112,8 +116,9 @@ int main(int argc, char **argv)
     else if (!std::strcmp(argv[i], "--grids") && i + 1 < argc) grids = parse_list(argv[++i]);
     else if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) reps = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--phases")) phases = true;
+    else if (!std::strcmp(argv[i], "--errors")) errors = true;
     else {
-      std::fprintf(stderr, "usage: %s [--sizes ..] [--orders ..] [--leaves ..] [--grids ..] [--reps R] [--phases]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--sizes ..] [--orders ..] [--leaves ..] [--grids ..] [--reps R] [--phases] [--errors]\n", argv[0]);
       return 1;
     }
   }
@@ -125,8 +130,9 @@ int main(int argc, char **argv)
     std::printf("\n");
   } else if (leaves.empty()) {
     std::printf("| N | order | open leaf (depth) | open CPU s | periodic choice | periodic CPU s | periodic/open |"
-                " periodic octree leaf (depth) | periodic octree CPU s | octree/open |\n");
-    std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
+                " periodic octree leaf (depth) | periodic octree CPU s | octree/open |%s\n",
+                errors ? " open error | periodic choice error | periodic octree error |" : "");
+    std::printf("|---|---|---|---|---|---|---|---|---|---|%s\n", errors ? "---|---|---|" : "");
   } else {
     std::printf("| N | order | free leaf (depth) | free CPU s | periodic leaf (depth) | periodic CPU s | ratio |\n");
     std::printf("|---|---|---|---|---|---|---|\n");
@@ -174,7 +180,30 @@ int main(int argc, char **argv)
         const bool per[3] = {false, true, true};
         const int lf[3] = {co.leaf_size, cp.leaf_size, cp.leaf_size}, gr[3] = {0, cp.grid, 0};
         Timing t[3];
-        time_modes(p, order, 3, per, lf, reps, t, gr);
+        std::vector<double> g[3];
+        time_modes(p, order, 3, per, lf, reps, t, gr, errors ? g : nullptr);
+        double err[3] = {-1, -1, -1};
+        if (errors) {    // against the periodic octree at order 13 (agrees with Ewald to ~3e-11)
+          Options o;
+          o.order = 13;
+          o.fixed_root = true;
+          o.periodic = true;
+          o.leaf_size = choose_tree(13, n, true).leaf_size;
+          std::vector<double> rg(3 * n);
+          make_evaluator(KernelSpec{}, o)->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), nullptr, rg.data());
+          o.periodic = false;
+          std::vector<double> ro(3 * n);
+          make_evaluator(KernelSpec{}, o)->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), nullptr, ro.data());
+          for (int m = 0; m < 3; ++m) {
+            const std::vector<double> &r = per[m] ? rg : ro;
+            double num = 0, den = 0;
+            for (std::size_t i = 0; i < r.size(); ++i) {
+              num += (g[m][i] - r[i]) * (g[m][i] - r[i]);
+              den += r[i] * r[i];
+            }
+            err[m] = std::sqrt(num / den);
+          }
+        }
         if (phases)
           for (int m = 0; m < 3; ++m) {
             std::printf("    N=%zu p=%d leaf=%d grid=%d depth=%d %s cpu %.4f\n", n, order, t[m].leaf, gr[m], t[m].depth,
@@ -184,9 +213,11 @@ int main(int argc, char **argv)
         char pc[64];
         if (cp.grid > 0) std::snprintf(pc, sizeof pc, "grid %d^3", cp.grid);
         else std::snprintf(pc, sizeof pc, "leaf %d (%d)", t[1].leaf, t[1].depth);
-        std::printf("| %zu | %d | %d (%d) | %.4f | %s | %.4f | %.2f | %d (%d) | %.4f | %.2f |\n", n, order, t[0].leaf,
+        std::printf("| %zu | %d | %d (%d) | %.4f | %s | %.4f | %.2f | %d (%d) | %.4f | %.2f |", n, order, t[0].leaf,
                     t[0].depth, t[0].cpu, pc, t[1].cpu, t[1].cpu / t[0].cpu, t[2].leaf, t[2].depth, t[2].cpu,
                     t[2].cpu / t[0].cpu);
+        if (errors) std::printf(" %.2e | %.2e | %.2e |", err[0], err[1], err[2]);
+        std::printf("\n");
         std::fflush(stdout);
         continue;
       }

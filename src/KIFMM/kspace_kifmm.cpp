@@ -622,7 +622,14 @@ void KSpaceKIFMM::report_first_evaluation()
 {
   reported_first_evaluation = true;
   const kifmm::Stats &s = engine->stats();
-  if (comm->me == 0)
+  if (comm->me == 0 && engine_options.periodic_grid > 0 && !distributed())
+    utils::logmesg(lmp,
+                   "  KIFMM first evaluation: {} sources, single-level grid of {}^3 cells, {} "
+                   "coincident pairs excluded\n"
+                   "  precompute {:.3g} s, operators and grid kernels {:.3g} MB, cells {:.3g} MB\n",
+                   s.n_sources, engine_options.periodic_grid, s.coincident_pairs, s.t_precompute,
+                   s.operator_bytes / 1048576.0, s.tree_bytes / 1048576.0);
+  else if (comm->me == 0)
     utils::logmesg(lmp,
                    "  KIFMM first evaluation: {} sources, tree depth {}, {} cells, {} leaves, "
                    "{} coincident pairs excluded\n"

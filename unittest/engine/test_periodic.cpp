@@ -20,19 +20,6 @@ using namespace kifmm_test;
 
 namespace {
 
-kifmm::Options periodic_opts(int order, int leaf, double h = 1.0, const double c[3] = nullptr)
-{
-  kifmm::Options o;
-  o.order = order;
-  o.leaf_size = leaf;
-  o.fixed_root = true;
-  o.periodic = true;
-  o.root_half_width = h;
-  if (c)
-    for (int d = 0; d < 3; ++d) o.root_center[d] = c[d];
-  return o;
-}
-
 struct PerErrors {
   double pot, grad;
 };
@@ -181,7 +168,7 @@ TEST(Periodic, LaplaceNeutralMatchesEwald)
   Points p = neutral(uniform_cube(3000, 21));
   double prev = 1;
   for (int order : {4, 6, 8, 10, 12, 14}) {
-    PerErrors e = periodic_errors(KernelSpec{}, periodic_opts(order, 40), p);
+    PerErrors e = periodic_errors(KernelSpec{}, periodic_options(order, 40), p);
     std::printf("  periodic laplace p=%2d: pot %.2e grad %.2e\n", order, e.pot, e.grad);
     EXPECT_LT(e.grad, order >= 12 ? 1e-9 : prev);
     EXPECT_LT(e.pot, 10 * e.grad + 1e-12);
@@ -196,7 +183,7 @@ TEST(Periodic, LaplaceNonNeutralIncludesTheBackground)
   const double c[3] = {0.5, -2.0, 10.0};
   for (double &x : p.xyz) x *= 1.5;
   for (int order : {6, 12}) {
-    PerErrors e = periodic_errors(KernelSpec{}, periodic_opts(order, 40, 1.5, c), p);
+    PerErrors e = periodic_errors(KernelSpec{}, periodic_options(order, 40, 1.5, c), p);
     std::printf("  periodic laplace non-neutral p=%2d: pot %.2e grad %.2e\n", order, e.pot, e.grad);
     EXPECT_LT(e.pot, order == 6 ? 1e-4 : 1e-9);
     EXPECT_LT(e.grad, order == 6 ? 1e-4 : 1e-9);
@@ -206,18 +193,12 @@ TEST(Periodic, LaplaceNonNeutralIncludesTheBackground)
 TEST(Periodic, DipolesAndClustersMatchEwald)
 {
   Points d = dipoles(1500, 23);
-  PerErrors e = periodic_errors(KernelSpec{}, periodic_opts(12, 40), d);
+  PerErrors e = periodic_errors(KernelSpec{}, periodic_options(12, 40), d);
   std::printf("  periodic dipoles p=12: pot %.2e grad %.2e\n", e.pot, e.grad);
   EXPECT_LT(e.grad, 1e-8);
   // a dense cluster near a corner of the cell: its images are close to it across the faces
-  Points c;
-  std::mt19937_64 g(5);
-  std::normal_distribution<double> nd(0.0, 0.03);
-  for (int i = 0; i < 3000; ++i) {
-    for (int k = 0; k < 3; ++k) c.xyz.push_back(0.97 + nd(g));    // wrapped by the engine
-    c.q.push_back(i % 2 ? 1.0 : -1.0);
-  }
-  e = periodic_errors(KernelSpec{}, periodic_opts(12, 30), c);
+  Points c = gaussian_cluster(3000, 0.97, 0.03, 5);    // wrapped by the engine
+  e = periodic_errors(KernelSpec{}, periodic_options(12, 30), c);
   std::printf("  periodic corner cluster p=12: pot %.2e grad %.2e\n", e.pot, e.grad);
   EXPECT_LT(e.grad, 1e-8);
 }
@@ -227,7 +208,7 @@ TEST(Periodic, YukawaMatchesLatticeSum)
   Points p = uniform_cube(2000, 24);
   // kappa h = 1.5 and 6 (screened Ewald table), 15 (direct image table)
   for (double kappa : {1.5, 6.0, 15.0}) {
-    PerErrors e = periodic_errors(KernelSpec{KernelType::Yukawa, kappa}, periodic_opts(10, 40), p);
+    PerErrors e = periodic_errors(KernelSpec{KernelType::Yukawa, kappa}, periodic_options(10, 40), p);
     std::printf("  periodic yukawa kappa %4.1f p=10: pot %.2e grad %.2e\n", kappa, e.pot, e.grad);
     EXPECT_LT(e.pot, 1e-7);
     EXPECT_LT(e.grad, 1e-7);
@@ -237,7 +218,7 @@ TEST(Periodic, YukawaMatchesLatticeSum)
 TEST(Periodic, RootLeafAndFewPoints)
 {
   Points p = uniform_cube(7, 25);
-  PerErrors e = periodic_errors(KernelSpec{}, periodic_opts(12, 64), p);
+  PerErrors e = periodic_errors(KernelSpec{}, periodic_options(12, 64), p);
   EXPECT_LT(e.grad, 1e-9);
   EXPECT_LT(e.pot, 1e-9);
 }
@@ -248,7 +229,7 @@ TEST(Periodic, PointsOutsideTheCellAreWrapped)
   Points s = p;
   for (std::size_t i = 0; i < s.size(); i += 3) s.xyz[3 * i + (i % 3)] += (i % 2 ? 2.0 : -4.0);
   const std::size_t n = p.size();
-  auto o = periodic_opts(8, 32);
+  auto o = periodic_options(8, 32);
   std::vector<double> a(n), ga(3 * n), b(n), gb(3 * n);
   kifmm::make_evaluator(KernelSpec{}, o)->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), a.data(), ga.data());
   kifmm::make_evaluator(KernelSpec{}, o)->evaluate(n, s.xyz.data(), s.q.data(), n, s.xyz.data(), b.data(), gb.data());
@@ -262,7 +243,7 @@ TEST(Periodic, CellSizeScaling)
   // (the lattice operator is computed once at unit size); set_root changes the cell
   Points p = neutral(uniform_cube(2000, 27));
   const std::size_t n = p.size();
-  auto ev = kifmm::make_evaluator(KernelSpec{}, periodic_opts(8, 40));
+  auto ev = kifmm::make_evaluator(KernelSpec{}, periodic_options(8, 40));
   std::vector<double> a(n), ga(3 * n), b(n), gb(3 * n);
   ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), a.data(), ga.data());
   const double s = 2.75, c[3] = {3.0, 3.0, 3.0};
@@ -305,7 +286,7 @@ TEST(Periodic, MutualNearFieldEqualsOneSided)
     std::vector<double> txyz(3 * m);
     for (std::size_t i = 0; i < m; ++i)
       for (int d = 0; d < 3; ++d) txyz[3 * i + d] = pts->xyz[3 * perm[i] + d];
-    auto ev = kifmm::make_evaluator(k, periodic_opts(6, 40));
+    auto ev = kifmm::make_evaluator(k, periodic_options(6, 40));
     std::vector<double> pm(m), gm(3 * m), po(m), go(3 * m), gn(3 * m), g1(3 * m);
     ev->evaluate(m, pts->xyz.data(), pts->q.data(), m, pts->xyz.data(), pm.data(), gm.data());
     const std::size_t zeros_mutual = ev->stats().coincident_pairs;
@@ -325,7 +306,7 @@ TEST(Periodic, MutualNearFieldEqualsOneSided)
     // one and two threads: the same bits
     const int saved = omp_get_max_threads();
     omp_set_num_threads(saved == 1 ? 2 : 1);
-    kifmm::make_evaluator(k, periodic_opts(6, 40))
+    kifmm::make_evaluator(k, periodic_options(6, 40))
         ->evaluate(m, pts->xyz.data(), pts->q.data(), m, pts->xyz.data(), nullptr, g1.data());
     omp_set_num_threads(saved);
     EXPECT_EQ(g1, gn);

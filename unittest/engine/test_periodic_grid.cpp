@@ -22,15 +22,7 @@ namespace {
 
 kifmm::Options grid_opts(int order, int k, double h = 1.0, const double c[3] = nullptr)
 {
-  kifmm::Options o;
-  o.order = order;
-  o.fixed_root = true;
-  o.periodic = true;
-  o.periodic_grid = k;
-  o.root_half_width = h;
-  if (c)
-    for (int d = 0; d < 3; ++d) o.root_center[d] = c[d];
-  return o;
+  return periodic_options(order, 0, h, c, k);
 }
 
 struct Result {
@@ -114,13 +106,7 @@ TEST(PeriodicGrid, DipolesAndCornerClusterMatchEwald)
   Reference ref = ewald(grid_opts(12, 5), d);
   std::printf("  grid dipoles p=12: pot %.2e grad %.2e\n", rel_l2(r.pot, ref.pot), rel_l2(r.grad, ref.grad));
   EXPECT_LT(rel_l2(r.grad, ref.grad), 1e-8);
-  Points c;
-  std::mt19937_64 g(5);
-  std::normal_distribution<double> nd(0.0, 0.03);
-  for (int i = 0; i < 3000; ++i) {
-    for (int k = 0; k < 3; ++k) c.xyz.push_back(0.97 + nd(g));
-    c.q.push_back(i % 2 ? 1.0 : -1.0);
-  }
+  Points c = gaussian_cluster(3000, 0.97, 0.03, 5);
   r = evaluate(grid_opts(12, 6), c);
   ref = ewald(grid_opts(12, 6), c);
   std::printf("  grid corner cluster p=12: pot %.2e grad %.2e\n", rel_l2(r.pot, ref.pot), rel_l2(r.grad, ref.grad));
@@ -131,8 +117,7 @@ TEST(PeriodicGrid, DipolesAndCornerClusterMatchEwald)
 TEST(PeriodicGrid, EqualsThePeriodicOctreeAtHighOrder)
 {
   Points p = neutral(uniform_cube(4000, 34));
-  kifmm::Options oct = grid_opts(13, 0);
-  oct.leaf_size = 64;
+  const kifmm::Options oct = periodic_options(13, 64);
   const Result a = evaluate(grid_opts(13, 7), p), b = evaluate(oct, p);
   EXPECT_GT(b.stats.depth, 0);
   EXPECT_LT(rel_l2(a.grad, b.grad), 1e-9);
@@ -219,13 +204,7 @@ TEST(PeriodicGrid, CostModelChoice)
   const kifmm::TreeChoice y =
       kifmm::choose_tree(KernelSpec{kifmm::KernelType::Yukawa, 2.0}, o, p.size(), p.xyz.data());
   EXPECT_EQ(y.grid, 0);
-  Points c2;
-  std::mt19937_64 g(6);
-  std::normal_distribution<double> nd(0.0, 0.01);
-  for (int i = 0; i < 10000; ++i) {
-    for (int k = 0; k < 3; ++k) c2.xyz.push_back(0.3 + nd(g));
-    c2.q.push_back(i % 2 ? 1.0 : -1.0);
-  }
+  const Points c2 = gaussian_cluster(10000, 0.3, 0.01, 6);
   const kifmm::TreeChoice cc = kifmm::choose_tree(KernelSpec{}, o, c2.size(), c2.xyz.data());
   EXPECT_EQ(cc.grid, 0);
   EXPECT_GE(cc.depth, 4);

@@ -93,6 +93,35 @@ inline Points dipoles(std::size_t npairs, unsigned seed)
   return p;
 }
 
+// n alternating charges +-1 in a Gaussian cluster of this width around (c, c, c)
+inline Points gaussian_cluster(std::size_t n, double c, double sigma, unsigned seed)
+{
+  Points p;
+  std::mt19937_64 g(seed);
+  std::normal_distribution<double> nd(0.0, sigma);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) p.xyz.push_back(c + nd(g));
+    p.q.push_back(i % 2 ? 1.0 : -1.0);
+  }
+  return p;
+}
+
+// Options of a periodic evaluation: the cubic cell of half-width h centered at c (origin if
+// null) as fixed root; grid: cells per side of the single-level grid (0: octree of this leaf).
+inline kifmm::Options periodic_options(int order, int leaf, double h = 1.0, const double c[3] = nullptr, int grid = 0)
+{
+  kifmm::Options o;
+  o.order = order;
+  o.leaf_size = leaf;
+  o.fixed_root = true;
+  o.periodic = true;
+  o.periodic_grid = grid;
+  o.root_half_width = h;
+  if (c)
+    for (int d = 0; d < 3; ++d) o.root_center[d] = c[d];
+  return o;
+}
+
 // The same points with the mean charge subtracted (net charge zero).
 inline Points neutral(Points p)
 {

@@ -1,5 +1,5 @@
 // Strong-scaling benchmark of the distributed evaluation (engine level, no LAMMPS):
-//   mpirun -np P bench_scaling N [uniform|periodic|plummer] [order] [reps] [top_level]
+//   mpirun -np P bench_scaling N [uniform|periodic|plummer] [order] [reps] [top_level] [choice]
 // Each rank makes only its own points: uniform in its brick of a P-brick decomposition of
 // [-1,1]^3 (as LAMMPS's processor grid; periodic: the same points, [-1,1]^3 is the periodic
 // cell, Laplace with its background term), or, for plummer, the points of a Plummer sphere in its
@@ -62,6 +62,9 @@ int main(int argc, char **argv)
   const int order = argc > 3 ? std::atoi(argv[3]) : 6;
   const int reps = argc > 4 ? std::atoi(argv[4]) : 3;
   const int top = argc > 5 ? std::atoi(argv[5]) : 0;
+  // "choice": leaf size (periodic: or single-level grid) of kifmm::choose_tree(order, N,
+  // periodic, grid), as kspace_style kifmm on several ranks; default: the per-order leaf size
+  const bool choice = argc > 6 && std::string(argv[6]) == "choice";
   int g[3];
   grid(P, g);
   const int c[3] = {me % g[0], (me / g[0]) % g[1], me / (g[0] * g[1])};
@@ -100,6 +103,11 @@ int main(int argc, char **argv)
     o.fixed_root = true;
     o.root_half_width = 1.0;
   }
+  if (choice) {    // as kspace_style kifmm on several ranks: the uniform model's tree or grid
+    const kifmm::TreeChoice c = kifmm::choose_tree(order, N, o.periodic, o.periodic);
+    o.leaf_size = c.leaf_size;
+    o.periodic_grid = c.grid;
+  }
   kifmm::KernelSpec spec;
   kifmm::FmmEvaluator<kifmm::LaplaceKernel> ev(kifmm::LaplaceKernel{}, spec, o);
   kifmm::MpiCommunicator comm(MPI_COMM_WORLD);
@@ -135,7 +143,8 @@ int main(int argc, char **argv)
     fclose(f);
   }
   if (me == 0) {
-    printf("{\"N\": %zu, \"dist\": \"%s\", \"order\": %d, \"ranks\": %d, \"threads\": %d, \"top_level\": %d, "
+    printf("{\"grid\": %d, \"leaf\": %d, ", o.periodic_grid, o.leaf_size);
+    printf("\"N\": %zu, \"dist\": \"%s\", \"order\": %d, \"ranks\": %d, \"threads\": %d, \"top_level\": %d, "
            "\"wall\": %.6g, \"cpu_sum\": %.6g, \"bytes_min\": %.0f, \"bytes_avg\": %.0f, \"bytes_max\": %.0f, "
            "\"ghost_bytes_max\": %.0f, \"let_bytes_max\": %.0f, \"let_cells_avg\": %.1f, "
            "\"ghosts_min\": %.0f, \"ghosts_avg\": %.1f, \"ghosts_max\": %.0f, "

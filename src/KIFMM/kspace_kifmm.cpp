@@ -167,9 +167,10 @@ void KSpaceKIFMM::init()
   else
     opt.cache_dir = kset.cache_dir.empty() ? default_cache_dir() : kset.cache_dir;
   opt.periodic = periodic;
-  // periodic single-level grid (one rank; several ranks use the octree): given by
-  // kspace_modify kifmm grid K, or (grid auto, no leaf size given) chosen with the tree below
+  // periodic single-level grid: given by kspace_modify kifmm grid K, or (grid auto, no leaf
+  // size given) chosen with the tree below (coulomb and gravity: the Laplace kernel)
   opt.periodic_grid = 0;
+  const bool grid_auto = periodic && kset.grid < 0 && kset.kernel != LongRangeKernel::Yukawa;
   if (kset.grid > 0) {
     if (!periodic)
       error->all(FLERR, "kspace_modify kifmm grid {}: the single-level grid needs periodic boundaries "
@@ -177,19 +178,20 @@ void KSpaceKIFMM::init()
     if (kset.kernel == LongRangeKernel::Yukawa)
       error->all(FLERR, "kspace_modify kifmm grid {}: the single-level grid is for the coulomb and "
                         "gravity kernels, not yukawa", kset.grid);
-    if (!distributed()) opt.periodic_grid = kset.grid;
+    opt.periodic_grid = kset.grid;
   }
   if (kset.leaf > 0) {
     opt.leaf_size = kset.leaf;
   } else {
-    tree = kifmm::choose_tree(opt.order, (std::size_t) nstrong, periodic);
+    tree = kifmm::choose_tree(opt.order, (std::size_t) nstrong, periodic, grid_auto);
     opt.leaf_size = tree.leaf_size;
+    if (grid_auto) opt.periodic_grid = tree.grid;    // several ranks: this choice (uniform model)
     if (!distributed()) {
       tree_choice_pending = true;
       if (engine && engine_options.order == opt.order && engine_options.cache_dir == opt.cache_dir &&
           engine_options.periodic == opt.periodic) {
         opt.leaf_size = engine_options.leaf_size;    // kept until the new choice
-        if (kset.grid < 0) opt.periodic_grid = engine_options.periodic_grid;
+        if (grid_auto) opt.periodic_grid = engine_options.periodic_grid;
       }
     }
   }
@@ -217,11 +219,8 @@ void KSpaceKIFMM::init()
       mesg += fmt::format("\n  order = {}, {} chosen from the atom positions at the first "
                           "evaluation (least modelled cost of the actual trees{}; for {} uniformly "
                           "spread atoms, {} boundaries: leaf size {}, tree depth {})",
-                          engine_options.order,
-                          periodic && kset.grid < 0 && kset.kernel != LongRangeKernel::Yukawa
-                              ? "leaf size or single-level grid" : "leaf size",
-                          periodic && kset.grid < 0 && kset.kernel != LongRangeKernel::Yukawa
-                              ? " and grids" : "",
+                          engine_options.order, grid_auto ? "leaf size or single-level grid" : "leaf size",
+                          grid_auto ? " and grids" : "",
                           nstrong, periodic ? "periodic" : "open", tree.leaf_size, tree.depth);
     else
       mesg += fmt::format("\n  order = {}, leaf size = {}", engine_options.order, engine_options.leaf_size);
@@ -229,12 +228,10 @@ void KSpaceKIFMM::init()
       mesg += fmt::format(" (tree depth {} for {} uniformly spread atoms, {} boundaries: least "
                           "modelled cost)",
                           tree.depth, nstrong, periodic ? "periodic" : "open");
-    if (engine_options.periodic_grid > 0)
-      mesg += fmt::format("\n  periodic single-level grid of {}^3 cells (kspace_modify kifmm grid)",
-                          engine_options.periodic_grid);
-    else if (kset.grid > 0 && distributed())
-      mesg += fmt::format("\n  kspace_modify kifmm grid {}: the grid is serial; the octree is used on {} ranks",
-                          kset.grid, comm->nprocs);
+    if (engine_options.periodic_grid > 0 && (kset.grid > 0 || !tree_choice_pending))
+      mesg += fmt::format("\n  periodic single-level grid of {}^3 cells ({})", engine_options.periodic_grid,
+                          kset.grid > 0 ? "kspace_modify kifmm grid"
+                                        : fmt::format("for {} uniformly spread atoms: least modelled cost", nstrong));
     mesg += "\n";
     if (est >= 0)
       mesg += fmt::format("  requested relative force error = {:.3g}, calibrated = {:.3g}\n",
@@ -622,7 +619,7 @@ void KSpaceKIFMM::report_first_evaluation()
 {
   reported_first_evaluation = true;
   const kifmm::Stats &s = engine->stats();
-  if (comm->me == 0 && engine_options.periodic_grid > 0 && !distributed())
+  if (comm->me == 0 && engine_options.periodic_grid > 0)
     utils::logmesg(lmp,
                    "  KIFMM first evaluation: {} sources, single-level grid of {}^3 cells, {} "
                    "coincident pairs excluded\n"

@@ -83,7 +83,7 @@ struct Result {
 // periodic_half > 0: periodic boundaries, the cell [-periodic_half, periodic_half]^3
 template <class K>
 Result compare(const K &k, const kifmm::KernelSpec &spec, const Points &all, const Partition &part, int top_level,
-               int leaf = 24, int order = 6, double periodic_half = 0.0)
+               int leaf = 24, int order = 6, double periodic_half = 0.0, int grid = 0)
 {
   const int me = rank_of_world(), np = size_of_world();
   kifmm::Options o;
@@ -94,6 +94,7 @@ Result compare(const K &k, const kifmm::KernelSpec &spec, const Points &all, con
     o.periodic = true;
     o.fixed_root = true;
     o.root_half_width = periodic_half;
+    o.periodic_grid = grid;
   }
   kifmm::FmmEvaluator<K> serial(k, spec, o), dist(k, spec, o);
   const std::size_t n = all.size();
@@ -148,14 +149,15 @@ Points with_zero_charges(Points p)
 const Partition kPartitions[] = {slabs_last_empty, blocks, random_owner, all_on_last};
 const char *kPartitionNames[] = {"slabs (last rank empty)", "blocks", "random", "all on the last rank"};
 
-void check_all_partitions(const Points &p, int top_level, int leaf = 24, double periodic_half = 0.0, int order = 6)
+void check_all_partitions(const Points &p, int top_level, int leaf = 24, double periodic_half = 0.0, int order = 6,
+                          int grid = 0)
 {
   kifmm::LaplaceKernel k;
   kifmm::KernelSpec spec;
   for (int j = 0; j < 4; ++j) {
-    Result r = compare(k, spec, p, kPartitions[j], top_level, leaf, order, periodic_half);
-    EXPECT_LE(r.grad, 1e-10) << kPartitionNames[j] << ", top level " << top_level;
-    EXPECT_LE(r.pot, 1e-10) << kPartitionNames[j] << ", top level " << top_level;
+    Result r = compare(k, spec, p, kPartitions[j], top_level, leaf, order, periodic_half, grid);
+    EXPECT_LE(r.grad, 1e-10) << kPartitionNames[j] << ", top level " << top_level << ", grid " << grid;
+    EXPECT_LE(r.pot, 1e-10) << kPartitionNames[j] << ", top level " << top_level << ", grid " << grid;
   }
 }
 
@@ -398,6 +400,19 @@ TEST(Distributed, PeriodicNetChargeAndDipolesEqualSerial)
   for (double &q : p.q) q = std::fabs(q);
   for (int top : {0, 3}) check_all_partitions(p, top, 24, 1.0);
   for (int top : {0, 2}) check_all_partitions(dipoles(1000, 34), top, 24, 1.0);
+}
+
+// The periodic single-level grid (Options::periodic_grid): ghosts of the neighbour cells, the
+// cells' densities, background moments and wrap marginals summed over ranks
+TEST(Distributed, PeriodicGridEqualsSerial)
+{
+  const Points u = with_zero_charges(neutral(uniform_cube(3000, 31)));
+  for (int k : {3, 5}) check_all_partitions(u, 0, 24, 1.0, 6, k);
+  check_all_partitions(neutral(periodic_clusters(2400, 32)), 0, 24, 1.0, 6, 6);
+  Points nc = uniform_cube(2000, 33);
+  for (double &q : nc.q) q = std::fabs(q);
+  check_all_partitions(nc, 0, 24, 1.0, 8, 4);
+  for (std::size_t n : {5, 40}) check_all_partitions(neutral(uniform_cube(n, 35)), 0, 24, 1.0, 6, 3);
 }
 
 TEST(Distributed, PeriodicFewPointsEqualSerial)

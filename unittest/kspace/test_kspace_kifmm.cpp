@@ -649,6 +649,12 @@ TEST_F(MpiEqualsSerial, PeriodicBrick)
   check_force_reference(REFERENCE_DIR "/kifmm_mpi_periodic.yaml");
 }
 
+// the single-level grid (grid 5): distributed on several ranks, equal to the serial grid
+TEST_F(MpiEqualsSerial, PeriodicGridBrick)
+{
+  check_force_reference(REFERENCE_DIR "/kifmm_mpi_periodic_grid.yaml");
+}
+
 TEST_F(MpiEqualsSerial, PeriodicRcb)
 {
   check_force_reference(REFERENCE_DIR "/kifmm_mpi_periodic_rcb.yaml");

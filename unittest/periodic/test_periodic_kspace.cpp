@@ -524,7 +524,7 @@ TEST_F(Periodic, GridNeedsPeriodicBoundaries)
   EXPECT_LAMMPS_ERROR(command("run 0"), "grid 4: the single-level grid needs periodic boundaries");
 }
 
-TEST_F(Periodic, GridIsNotForYukawaAndItsValueIsChecked)
+TEST_F(Periodic, GridNeedsTheLaplaceKernelAndAValidValue)
 {
   load(uniform_cube(50, 56));
   commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4\n"

@@ -34,6 +34,10 @@ void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, co
     const double *sxyz = xyz;
     periodic_wrap(n, sxyz, n, xyz);
   }
+  if (opt_.periodic && opt_.periodic_grid > 0) {    // single-level grid (periodic_grid_core.h)
+    evaluate_grid_distributed(comm, n, xyz, q, pot, grad);
+    return;
+  }
   DistributedData dd;
   distributed_setup(comm, opt_.top_level, opt_.leaf_size, opt_.max_depth, nsurf_, !level_independent_operators<K>(),
                     opt_.fixed_root ? &fixed : nullptr, opt_.periodic, n, xyz, q, dd);

@@ -148,8 +148,16 @@ template <class K> class FmmEvaluator : public Evaluator {
   // periodic single-level grid of opt_.periodic_grid^3 cells (periodic_grid.h, periodic_grid_core.h)
   std::shared_ptr<const GridKernel> grid_kernel_;
   std::vector<int> grid_src_begin_, grid_trg_begin_;    // per cell, sorted order (+ end)
+  std::vector<int> grid_own_end_;                       // per cell: end of its own sources
   void evaluate_grid(std::size_t ns, const double *sxyz, const double *sq, std::size_t nt, const double *txyz,
                      double *pot, double *grad, bool same_points);
+  void evaluate_grid_distributed(Communicator &comm, std::size_t n, const double *xyz, const double *q, double *pot,
+                                 double *grad);
+  int grid_cell_of(const double *x) const;
+  int grid_neighbour(int b, int dx, int dy, int dz, signed char sh[3]) const;
+  void grid_bin(std::size_t ns, const double *sxyz, const double *sq, std::size_t nt, const double *txyz,
+                bool same_points, std::size_t own_sources);
+  void grid_passes(Communicator *comm, std::size_t own_sources, bool want_pot, bool same_points);
   // M2L layout of level l: source cells (children of a target parent's colleague) and target
   // cells (V non-empty) in slots of xhat_/yhat_ (sized here), and per parent of level l-1 the
   // spectra of its 8 children (xtab/ytab, nullptr where absent). False if no target.

@@ -23,47 +23,175 @@ void FmmEvaluator<K>::evaluate_grid(std::size_t ns, const double *sxyz, const do
   if constexpr (!std::is_same_v<K, LaplaceKernel>) {
     throw std::invalid_argument("kifmm: the periodic grid (Options::periodic_grid) is for the Laplace kernel");
   } else {
+    const double t0 = omp_get_wtime();
+    grid_bin(ns, sxyz, sq, nt, txyz, same_points, ns);
+    stats_.t_tree = omp_get_wtime() - t0;
+    grid_passes(nullptr, ns, pot != nullptr, same_points);
+    results_to_input_order(nt, pot, grad);
+  }
+}
+
+// Distributed (evaluate_distributed with Options::periodic_grid): every rank bins its own
+// points; the near field needs the sources of the 26 neighbour cells of every cell holding
+// own targets: the ranks' target cells are all-gathered (cell indices) and each rank sends the
+// others its sources in the cells next to theirs (ghosts, one alltoallv). The cells' upward
+// densities are the sum of every rank's own-source part (one allreduce of k^3 surfaces), the
+// convolution is done on every rank, the near field one-sided (sources include the ghosts),
+// the background moments and the wrap-correction marginals are summed over ranks.
+template <class K>
+void FmmEvaluator<K>::evaluate_grid_distributed(Communicator &comm, std::size_t n, const double *xyz,
+                                                const double *q, double *pot, double *grad)
+{
+  if constexpr (!std::is_same_v<K, LaplaceKernel>) {
+    throw std::invalid_argument("kifmm: the periodic grid (Options::periodic_grid) is for the Laplace kernel");
+  } else {
+    const double t0 = omp_get_wtime();
     const int k = opt_.periodic_grid;
     if (k < 3) throw std::invalid_argument("kifmm: Options::periodic_grid needs at least 3 cells per side");
     const int kc = k * k * k;
+    // own targets' cells, all-gathered
+    std::vector<char> mine(kc, 0);
+    for (std::size_t i = 0; i < n; ++i) mine[grid_cell_of(xyz + 3 * i)] = 1;
+    std::vector<int> my_cells, all_cells, counts;
+    for (int b = 0; b < kc; ++b)
+      if (mine[b]) my_cells.push_back(b);
+    double tc = omp_get_wtime();
+    comm.allgatherv(my_cells, all_cells, counts);
+    stats_.t_comm += omp_get_wtime() - tc;
+    // own sources (q != 0) first, then the ghosts
+    std::vector<double> sxyz, sq;
+    for (std::size_t i = 0; i < n; ++i)
+      if (q[i] != 0.0) {
+        sxyz.insert(sxyz.end(), xyz + 3 * i, xyz + 3 * i + 3);
+        sq.push_back(q[i]);
+      }
+    const std::size_t own = sq.size();
+    const int nr = comm.size(), me = comm.rank();
+    std::vector<std::vector<double>> send(nr), recv;
+    std::vector<char> near(kc);
+    for (int r = 0, at = 0; r < nr; at += counts[r], ++r) {
+      if (r == me) continue;
+      std::fill(near.begin(), near.end(), 0);
+      for (int e = at; e < at + counts[r]; ++e)
+        for (int o = 0; o < 27; ++o) {
+          signed char sh[3];
+          near[grid_neighbour(all_cells[e], o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, sh)] = 1;
+        }
+      for (std::size_t j = 0; j < own; ++j)
+        if (near[grid_cell_of(&sxyz[3 * j])]) send[r].insert(send[r].end(), {sxyz[3 * j], sxyz[3 * j + 1], sxyz[3 * j + 2], sq[j]});
+    }
+    tc = omp_get_wtime();
+    comm.alltoallv(send, recv);
+    stats_.t_comm += omp_get_wtime() - tc;
+    for (const auto &v : recv)
+      for (std::size_t j = 0; j + 3 < v.size(); j += 4) {
+        sxyz.insert(sxyz.end(), v.begin() + j, v.begin() + j + 3);
+        sq.push_back(v[j + 3]);
+      }
+    stats_.n_ghosts = sq.size() - own;
+    for (const auto &v : send) stats_.ghost_bytes += v.size() * sizeof(double);
+    std::size_t global = own;
+    {
+      uint64_t g = own;
+      comm.allreduce_sum(&g, 1);
+      global = g;
+    }
+    stats_.n_sources = global;
+    if (global == 0) {
+      stats_.comm_bytes = comm.bytes_sent();
+      return;
+    }
+    grid_bin(sq.size(), sxyz.data(), sq.data(), n, xyz, false, own);
+    stats_.t_tree = omp_get_wtime() - t0 - stats_.t_comm;
+    grid_passes(&comm, own, pot != nullptr, false);
+    results_to_input_order(n, pot, grad);
+    // a point of nonzero strength meets itself once (not a coincident pair)
+    if (stats_.coincident_pairs >= own) stats_.coincident_pairs -= own;
+    stats_.comm_bytes = comm.bytes_sent();
+  }
+}
+
+template <class K> int FmmEvaluator<K>::grid_cell_of(const double *x) const
+{
+  const int k = opt_.periodic_grid;
+  const double H = opt_.root_half_width, w = 2.0 * H / k, *c = opt_.root_center;
+  int a[3];
+  for (int d = 0; d < 3; ++d) a[d] = std::min(k - 1, std::max(0, (int) std::floor((x[d] - (c[d] - H)) / w)));
+  return (a[0] * k + a[1]) * k + a[2];
+}
+
+// cell at offset (dx, dy, dz) of cell b, and the root shift of that image in sh
+template <class K> int FmmEvaluator<K>::grid_neighbour(int b, int dx, int dy, int dz, signed char sh[3]) const
+{
+  const int k = opt_.periodic_grid;
+  const int a[3] = {b / (k * k) + dx, (b / k) % k + dy, b % k + dz};
+  int w3[3];
+  for (int d = 0; d < 3; ++d) {
+    sh[d] = (signed char) (a[d] < 0 ? -1 : a[d] >= k ? 1 : 0);
+    w3[d] = a[d] - sh[d] * k;
+  }
+  return (w3[0] * k + w3[1]) * k + w3[2];
+}
+
+// Points sorted by cell (stable counting sort: within a cell the input order, so the own
+// sources, input indices below own_sources, are a prefix of every cell's range), sorted copies.
+template <class K>
+void FmmEvaluator<K>::grid_bin(std::size_t ns, const double *sxyz, const double *sq, std::size_t nt,
+                               const double *txyz, bool same_points, std::size_t own_sources)
+{
+  const int k = opt_.periodic_grid;
+  if (k < 3) throw std::invalid_argument("kifmm: Options::periodic_grid needs at least 3 cells per side");
+  const int kc = k * k * k;
+  tree_ = Octree{};
+  for (int d = 0; d < 3; ++d) tree_.root.center[d] = opt_.root_center[d];
+  tree_.root.half_width = opt_.root_half_width;
+  auto bin = [&](std::size_t n, const double *xyz, std::vector<int> &begin, std::vector<uint32_t> &order) {
+    std::vector<int> cell(n);
+    begin.assign(kc + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) ++begin[(cell[i] = grid_cell_of(xyz + 3 * i)) + 1];
+    for (int b = 0; b < kc; ++b) begin[b + 1] += begin[b];
+    std::vector<int> next(begin.begin(), begin.end() - 1);
+    order.resize(n);
+    for (std::size_t i = 0; i < n; ++i) order[next[cell[i]]++] = (uint32_t) i;
+  };
+  bin(ns, sxyz, grid_src_begin_, tree_.src_order);
+  if (same_points) {
+    grid_trg_begin_ = grid_src_begin_;
+    tree_.trg_order = tree_.src_order;
+  } else {
+    bin(nt, txyz, grid_trg_begin_, tree_.trg_order);
+  }
+  grid_own_end_.resize(kc);
+  for (int b = 0; b < kc; ++b) {
+    int e = grid_src_begin_[b];
+    while (e < grid_src_begin_[b + 1] && tree_.src_order[e] < own_sources) ++e;
+    grid_own_end_[b] = e;
+  }
+  sorted_copies(ns, sxyz, sq, nt, txyz);
+}
+
+// The passes after binning (comm: null on one process; distributed: the upward densities,
+// cell occupancies, background moments and wrap marginals are summed over ranks).
+template <class K>
+void FmmEvaluator<K>::grid_passes(Communicator *comm, std::size_t own_sources, bool want_pot, bool same_points)
+{
+  if constexpr (std::is_same_v<K, LaplaceKernel>) {
+    const int k = opt_.periodic_grid;
+    const int kc = k * k * k;
     const double H = opt_.root_half_width, w = 2.0 * H / k, h = 0.5 * w;
     const double *c = opt_.root_center;
-    double t0 = omp_get_wtime();
-    // ---- bin the points by cell (counting sort, stable): the sorted order replaces the octree's
-    tree_ = Octree{};
-    tree_.root.center[0] = c[0];
-    tree_.root.center[1] = c[1];
-    tree_.root.center[2] = c[2];
-    tree_.root.half_width = H;
-    auto cell_of = [&](const double *x) {
-      int a[3];
-      for (int d = 0; d < 3; ++d) a[d] = std::min(k - 1, std::max(0, (int) std::floor((x[d] - (c[d] - H)) / w)));
-      return (a[0] * k + a[1]) * k + a[2];
+    const std::size_t nt = tx_.size();
+    auto reduce = [&](double *v, std::size_t m) {
+      if (!comm) return;
+      const double tc = omp_get_wtime();
+      comm->allreduce_sum(v, m);
+      stats_.t_comm += omp_get_wtime() - tc;
     };
-    auto bin = [&](std::size_t n, const double *xyz, std::vector<int> &begin, std::vector<uint32_t> &order) {
-      std::vector<int> cell(n);
-      begin.assign(kc + 1, 0);
-      for (std::size_t i = 0; i < n; ++i) ++begin[(cell[i] = cell_of(xyz + 3 * i)) + 1];
-      for (int b = 0; b < kc; ++b) begin[b + 1] += begin[b];
-      std::vector<int> next(begin.begin(), begin.end() - 1);
-      order.resize(n);
-      for (std::size_t i = 0; i < n; ++i) order[next[cell[i]]++] = (uint32_t) i;
-    };
-    bin(ns, sxyz, grid_src_begin_, tree_.src_order);
-    if (same_points) {
-      grid_trg_begin_ = grid_src_begin_;
-      tree_.trg_order = tree_.src_order;
-    } else {
-      bin(nt, txyz, grid_trg_begin_, tree_.trg_order);
-    }
-    sorted_copies(ns, sxyz, sq, nt, txyz);
-    const std::vector<int> &sb = grid_src_begin_, &tb = grid_trg_begin_;
+    const std::vector<int> &sb = grid_src_begin_, &tb = grid_trg_begin_, &own_end = grid_own_end_;
     auto center = [&](int b, double ctr[3]) {
       const int a[3] = {b / (k * k), (b / k) % k, b % k};
       for (int d = 0; d < 3; ++d) ctr[d] = c[d] - H + (a[d] + 0.5) * w;
     };
-    double t1 = omp_get_wtime();
-    stats_.t_tree = t1 - t0;
     stats_.depth = 0;
     stats_.n_cells = stats_.n_leaves = kc;
     // ---- operators of the cell size, and the grid kernels
@@ -85,7 +213,7 @@ void FmmEvaluator<K>::evaluate_grid(std::size_t ns, const double *sxyz, const do
     tgx_.assign(nt, 0.0);
     tgy_.assign(nt, 0.0);
     tgz_.assign(nt, 0.0);
-    double t2 = omp_get_wtime();
+    const double t2 = omp_get_wtime();
     // ---- P2M (cells with sources), batched
     constexpr int kBatch = 64;
     const int nchunks = (kc + kBatch - 1) / kBatch;
@@ -99,11 +227,11 @@ void FmmEvaluator<K>::evaluate_grid(std::size_t ns, const double *sxyz, const do
         chk.assign((std::size_t) nsurf_ * m, 0.0);
         for (int j = 0; j < m; ++j) {
           const int b = b0 + j;
-          if (sb[b + 1] == sb[b]) continue;
+          if (own_end[b] == sb[b]) continue;
           double ctr[3];
           center(b, ctr);
           box_surface(outer_, ctr, h, surf);
-          p2p<K, true, false, false>(k_, nsurf_, surf.x.data(), surf.y.data(), surf.z.data(), sb[b + 1] - sb[b],
+          p2p<K, true, false, false>(k_, nsurf_, surf.x.data(), surf.y.data(), surf.z.data(), own_end[b] - sb[b],
                                      &sx_[sb[b]], &sy_[sb[b]], &sz_[sb[b]], &sq_[sb[b]], &chk[(std::size_t) j * nsurf_],
                                      nullptr, nullptr, nullptr);
         }
@@ -112,6 +240,11 @@ void FmmEvaluator<K>::evaluate_grid(std::size_t ns, const double *sxyz, const do
         std::copy(eq.begin(), eq.end(), up(b0));
       }
     }
+    // cells with sources on any rank; the densities of the whole cells
+    std::vector<double> occupied(kc);
+    for (int b = 0; b < kc; ++b) occupied[b] = own_end[b] - sb[b];
+    reduce(occupied.data(), kc);
+    reduce(up_equiv_.data(), up_equiv_.size());
     double t3 = omp_get_wtime();
     stats_.t_upward = t3 - t2;
     // ---- M2L: surface spectra of all cells -> convolution over the cells -> check potentials
@@ -124,7 +257,7 @@ void FmmEvaluator<K>::evaluate_grid(std::size_t ns, const double *sxyz, const do
 #pragma omp for schedule(static)
       for (int b = 0; b < kc; ++b) {
         std::complex<double> *zb = z + (std::size_t) b * nf;
-        if (sb[b + 1] == sb[b]) {
+        if (occupied[b] == 0) {
           std::fill(zb, zb + nf, std::complex<double>(0.0));
           continue;
         }
@@ -165,7 +298,7 @@ void FmmEvaluator<K>::evaluate_grid(std::size_t ns, const double *sxyz, const do
           center(b, ctr);
           box_surface(outer_, ctr, h, surf);
           const std::size_t t = tb[b];
-          p2p_pg<K, false>(k_, pot != nullptr, tb[b + 1] - tb[b], &tx_[t], &ty_[t], &tz_[t], nsurf_, surf.x.data(),
+          p2p_pg<K, false>(k_, want_pot, tb[b + 1] - tb[b], &tx_[t], &ty_[t], &tz_[t], nsurf_, surf.x.data(),
                            surf.y.data(), surf.z.data(), dequiv(b), &tp_[t], &tgx_[t], &tgy_[t], &tgz_[t]);
         }
       }
@@ -174,16 +307,6 @@ void FmmEvaluator<K>::evaluate_grid(std::size_t ns, const double *sxyz, const do
     stats_.t_downward = t5 - t4;
     // ---- near field: each cell with itself and its 26 neighbours (images: shift in {-1,0,1}^3)
     const double L = 2.0 * H;
-    auto neighbour = [&](int b, int dx, int dy, int dz, signed char sh[3]) {
-      const int a[3] = {b / (k * k) + dx, (b / k) % k + dy, b % k + dz};
-      int w3[3];
-      for (int d = 0; d < 3; ++d) {
-        sh[d] = (signed char) (a[d] < 0 ? -1 : a[d] >= k ? 1 : 0);
-        w3[d] = a[d] - sh[d] * k;
-      }
-      return (w3[0] * k + w3[1]) * k + w3[2];
-    };
-    const bool want_pot = pot != nullptr;
     std::size_t zeros = 0;
     if (same_points) {    // pair by pair for both cells (13 of the 26 offsets)
       std::vector<int> self;
@@ -194,7 +317,7 @@ void FmmEvaluator<K>::evaluate_grid(std::size_t ns, const double *sxyz, const do
         for (int o = 14; o < 27; ++o) {
           MutualPair pr;
           pr.a = b;
-          pr.b = neighbour(b, o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, pr.shift);
+          pr.b = grid_neighbour(b, o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, pr.shift);
           if (sb[pr.b + 1] > sb[pr.b]) pairs.push_back(pr);
         }
       }
@@ -227,7 +350,7 @@ void FmmEvaluator<K>::evaluate_grid(std::size_t ns, const double *sxyz, const do
           zz.resize(n);
           for (int o = 0; o < 27; ++o) {
             signed char sh[3];
-            const int a = neighbour(b, o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, sh);
+            const int a = grid_neighbour(b, o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, sh);
             for (std::size_t i = 0; i < n; ++i) {
               x[i] = tx_[t + i] - sh[0] * L;
               y[i] = ty_[t + i] - sh[1] * L;
@@ -244,7 +367,8 @@ void FmmEvaluator<K>::evaluate_grid(std::size_t ns, const double *sxyz, const do
     stats_.t_p2p = omp_get_wtime() - t5;
     // ---- Laplace background (non-harmonic part of G_per), exact from the moments
     const double quad = gk.quad / (h * h * h);
-    periodic_background_moments(quad, c, SIZE_MAX);
+    periodic_background_moments(quad, c, own_sources);
+    reduce(periodic_moments_, 5);
     add_periodic_background(want_pot, c);
     // The kernels subtract quad |r|^2 at the separation r of the class representative (the
     // image of the source cell nearest to the target cell, r = x - y + L m with m in
@@ -256,7 +380,7 @@ void FmmEvaluator<K>::evaluate_grid(std::size_t ns, const double *sxyz, const do
     std::vector<double> Qa(3 * (std::size_t) k, 0.0), Pa(3 * (std::size_t) k, 0.0);
     for (int b = 0; b < kc; ++b) {
       const int sa[3] = {b / (k * k), (b / k) % k, b % k};
-      for (int j = sb[b]; j < sb[b + 1]; ++j) {
+      for (int j = sb[b]; j < own_end[b]; ++j) {
         const double y[3] = {sx_[j] - c[0], sy_[j] - c[1], sz_[j] - c[2]};
         for (int d = 0; d < 3; ++d) {
           Qa[d * k + sa[d]] += sq_[j];
@@ -264,6 +388,8 @@ void FmmEvaluator<K>::evaluate_grid(std::size_t ns, const double *sxyz, const do
         }
       }
     }
+    reduce(Qa.data(), Qa.size());
+    reduce(Pa.data(), Pa.size());
     auto wrap_of = [k](int t, int s) {    // m of the class representative in (-k/2, k/2]
       const int d = t - s, rep = ((d % k) + k) % k, D = 2 * rep <= k ? rep : rep - k;
       return (D - d) / k;
@@ -292,9 +418,13 @@ void FmmEvaluator<K>::evaluate_grid(std::size_t ns, const double *sxyz, const do
         tgz_[i] += 2 * quad * L * alpha[2];
       }
     }
-    results_to_input_order(nt, pot, grad);
     stats_.tree_bytes = sizeof(double) * (up_equiv_.size() + dn_check_.size() + dn_equiv_.size() + sx_.size() * 4 +
                                           tx_.size() * 7);
+  } else {
+    (void) comm;
+    (void) own_sources;
+    (void) want_pot;
+    (void) same_points;
   }
 }
 

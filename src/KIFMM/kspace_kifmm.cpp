@@ -168,16 +168,14 @@ void KSpaceKIFMM::init()
     opt.cache_dir = kset.cache_dir.empty() ? default_cache_dir() : kset.cache_dir;
   opt.periodic = periodic;
   // periodic single-level grid: given by kspace_modify kifmm grid K, or (grid auto, no leaf
-  // size given) chosen with the tree below (coulomb and gravity: the Laplace kernel)
+  // size given; coulomb and gravity, whose grid kernels do not depend on the box size) chosen
+  // with the tree below
   opt.periodic_grid = 0;
   const bool grid_auto = periodic && kset.grid < 0 && kset.kernel != LongRangeKernel::Yukawa;
   if (kset.grid > 0) {
     if (!periodic)
       error->all(FLERR, "kspace_modify kifmm grid {}: the single-level grid needs periodic boundaries "
                         "(boundary p p p)", kset.grid);
-    if (kset.kernel == LongRangeKernel::Yukawa)
-      error->all(FLERR, "kspace_modify kifmm grid {}: the single-level grid is for the coulomb and "
-                        "gravity kernels, not yukawa", kset.grid);
     opt.periodic_grid = kset.grid;
   }
   if (kset.leaf > 0) {

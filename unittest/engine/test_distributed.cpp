@@ -230,16 +230,16 @@ TEST(Distributed, AdaptiveTopTreeEqualsSerial)
 }
 
 // Yukawa (kappa 2): every partition, top level 0 or 3
-void check_yukawa(const Points &p, double periodic_half)
+void check_yukawa(const Points &p, double periodic_half, int grid = 0)
 {
   kifmm::KernelSpec spec;
   spec.type = kifmm::KernelType::Yukawa;
   spec.kappa = 2.0;
   kifmm::YukawaKernel k{2.0};
   for (int j = 0; j < 4; ++j) {
-    Result r = compare(k, spec, p, kPartitions[j], j % 2 ? 3 : 0, 24, 6, periodic_half);
-    EXPECT_LE(r.grad, 1e-10) << kPartitionNames[j];
-    EXPECT_LE(r.pot, 1e-10) << kPartitionNames[j];
+    Result r = compare(k, spec, p, kPartitions[j], j % 2 ? 3 : 0, 24, 6, periodic_half, grid);
+    EXPECT_LE(r.grad, 1e-10) << kPartitionNames[j] << ", grid " << grid;
+    EXPECT_LE(r.pot, 1e-10) << kPartitionNames[j] << ", grid " << grid;
   }
 }
 
@@ -423,6 +423,7 @@ TEST(Distributed, PeriodicFewPointsEqualSerial)
 TEST(Distributed, PeriodicYukawaEqualsSerial)
 {
   check_yukawa(periodic_clusters(2400, 36), 1.0);
+  check_yukawa(periodic_clusters(2400, 36), 1.0, 5);    // the single-level grid
 }
 
 TEST(Distributed, PeriodicLocallyEssentialTrees)

@@ -434,11 +434,13 @@ TEST_F(Periodic, YukawaEqualsCoulDebyeOverImages)
     command("neigh_modify one 100000 page 2000000");
     commands(fmt_cmd("pair_style coul/debye {} {}\npair_coeff * *\nrun 0 post no", kappa, rc));
     Result ref{forces_by_id(), thermo("pe")};
-    Result r = kifmm("1e-10", "kernel yukawa " + to_s(kappa) + " order 12 leaf 40");
-    const double ef = relative_force_error(r.f, ref.f), ee = rel(r.energy, ref.energy);
-    if (rank() == 0) std::printf("  yukawa kappa %g: force %.2e energy %.2e\n", kappa, ef, ee);
-    EXPECT_LE(ef, 1e-9);
-    EXPECT_LE(ee, 1e-9);
+    for (const char *tree : {"leaf 40", "grid 4"}) {    // the octree and the single-level grid
+      Result r = kifmm("1e-10", "kernel yukawa " + to_s(kappa) + " order 12 " + tree);
+      const double ef = relative_force_error(r.f, ref.f), ee = rel(r.energy, ref.energy);
+      if (rank() == 0) std::printf("  yukawa kappa %g, %s: force %.2e energy %.2e\n", kappa, tree, ef, ee);
+      EXPECT_LE(ef, 1e-9) << tree;
+      EXPECT_LE(ee, 1e-9) << tree;
+    }
   }
 }
 
@@ -524,12 +526,10 @@ TEST_F(Periodic, GridNeedsPeriodicBoundaries)
   EXPECT_LAMMPS_ERROR(command("run 0"), "grid 4: the single-level grid needs periodic boundaries");
 }
 
-TEST_F(Periodic, GridNeedsTheLaplaceKernelAndAValidValue)
+TEST_F(Periodic, GridValueIsChecked)
 {
   load(uniform_cube(50, 56));
-  commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4\n"
-           "kspace_modify kifmm kernel yukawa 2.0 grid 4");
-  EXPECT_LAMMPS_ERROR(command("run 0"), "grid 4: the single-level grid is for the coulomb and gravity kernels");
+  commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4");
   EXPECT_LAMMPS_ERROR(command("kspace_modify kifmm grid 2"), "grid 2 is out of range 3..32");
   EXPECT_LAMMPS_ERROR(command("kspace_modify kifmm grid yes"), "grid 'yes' must be auto, no or an integer");
 }

@@ -39,7 +39,7 @@ struct Options {
   // for a net charge; Yukawa: the lattice sum. Needs fixed_root (see set_root, periodic.h).
   bool periodic = false;
   // Periodic only: 0 = octree; k >= 3 = one level of k^3 cells instead (periodic_grid.h;
-  // Laplace; evaluate() and evaluate_distributed()).
+  // Laplace and Yukawa; evaluate() and evaluate_distributed()).
   int periodic_grid = 0;
   // Distributed evaluation: level of the global top tree (0 = from the number of ranks,
   // see distributed.h).
@@ -123,7 +123,7 @@ struct TreeChoice {
   int grid = 0;       // periodic: cells per side of the single-level grid (Options::periodic_grid)
                       // that is cheaper than the octree; 0 = the octree (leaf_size, depth)
 };
-// grid (periodic, Laplace kernel only: the caller's knowledge): also the single-level grids
+// grid (periodic; the caller passes it for the Laplace kernel): also the single-level grids
 // k = 3 .. max_grid_cells(order) on uniform counts (cost_model.h), chosen with the rule of the
 // choice from the points below (TreeChoice::grid; the octree's leaf size and depth are kept).
 TreeChoice choose_tree(int order, std::size_t n, bool periodic, bool grid = false);

@@ -10,6 +10,7 @@
 #include <map>
 #include <mutex>
 #include <stdexcept>
+#include <tuple>
 
 namespace kifmm {
 
@@ -53,9 +54,9 @@ namespace {
 // coordinates per axis. G_per(r) = G_per,unit(r / k) / k (period 2k), by the Ewald split of
 // the unit cell: real-space terms (the excluded near images in regular form, -erf / rho),
 // the reciprocal sum (separable on the tensor grid: three contractions) and the background.
-std::vector<double> grid_kernel_values(int k, int p)
+std::vector<double> grid_kernel_values(const KernelSpec &unit, int k, int p)
 {
-  const Split s(KernelSpec{});
+  const Split s(unit);
   const int m = 2 * p - 1, nc = k * m;
   const double dx = p > 1 ? 2.0 * kRadiusInner / (p - 1) : 0.0;
   std::vector<int> rep(nc);    // class representative of each 1D coordinate
@@ -95,7 +96,7 @@ std::vector<double> grid_kernel_values(int k, int p)
         B[((std::size_t) a * nc + y) * nc + z] = acc;
       }
   std::vector<double> v((std::size_t) nc * nc * nc);
-  const double quad_unit = 2 * kPi / (3 * kVolume);
+  const double quad_unit = s.yukawa ? 0.0 : 2 * kPi / (3 * kVolume);
 #pragma omp parallel for schedule(dynamic, 1)
   for (int x = 0; x < nc; ++x)
     for (int y = 0; y < nc; ++y)
@@ -110,7 +111,8 @@ std::vector<double> grid_kernel_values(int k, int p)
         int cand[3][5], nc3[3] = {0, 0, 0};
         for (int c = 0; c < 3; ++c)
           for (int q = -2; q <= 2; ++q)
-            if (std::abs(r[c] + kPeriod * q) <= kRealCut || std::abs(D[c] + k * q) <= 1) cand[c][nc3[c]++] = q;
+            if (s.direct || std::abs(r[c] + kPeriod * q) <= kRealCut || std::abs(D[c] + k * q) <= 1)
+              cand[c][nc3[c]++] = q;
         for (int ix = 0; ix < nc3[0]; ++ix)
           for (int iy = 0; iy < nc3[1]; ++iy)
             for (int iz = 0; iz < nc3[2]; ++iz) {
@@ -123,6 +125,13 @@ std::vector<double> grid_kernel_values(int k, int p)
                 d2 += d * d;
               }
               const double rho = std::sqrt(d2);
+              if (s.direct) {    // direct image sum (Yukawa, kappa >= 10): the excluded terms are left out
+                if (excluded) continue;
+                double t, F;
+                s.real(rho, false, t, F);
+                val += t;
+                continue;
+              }
               if (excluded && rho == 0.0) {
                 val += s.reg0();
                 continue;
@@ -138,7 +147,7 @@ std::vector<double> grid_kernel_values(int k, int p)
   return v;
 }
 
-std::shared_ptr<GridKernel> compute_grid_kernel(int k, int p)
+std::shared_ptr<GridKernel> compute_grid_kernel(const KernelSpec &unit, int k, int p)
 {
   if (k < 3) throw std::invalid_argument("kifmm: a periodic grid needs at least 3 cells per side");
   auto g = std::make_shared<GridKernel>();
@@ -146,10 +155,10 @@ std::shared_ptr<GridKernel> compute_grid_kernel(int k, int p)
   g->p = p;
   g->nraw = m2l_nfreq_raw(p);
   g->nfreq = m2l_nfreq(p);
-  g->quad = 2 * kPi / (3.0 * (2.0 * k) * (2.0 * k) * (2.0 * k));
+  g->quad = unit.type == KernelType::Yukawa ? 0.0 : 2 * kPi / (3.0 * (2.0 * k) * (2.0 * k) * (2.0 * k));
   const int n = m2l_grid_n(p), m = 2 * p - 1, nc = k * m;
   const std::size_t kc = (std::size_t) k * k * k;
-  const std::vector<double> v = grid_kernel_values(k, p);
+  const std::vector<double> v = grid_kernel_values(unit, k, p);
   std::complex<double> *z = grid_alloc((std::size_t) g->nfreq * kc);
   std::fill(z, z + (std::size_t) g->nfreq * kc, std::complex<double>(0.0));
   {
@@ -203,16 +212,18 @@ std::shared_ptr<GridKernel> compute_grid_kernel(int k, int p)
 
 }    // namespace
 
-std::shared_ptr<const GridKernel> periodic_grid_kernel(int k, int p)
+std::shared_ptr<const GridKernel> periodic_grid_kernel(const KernelSpec &unit, int k, int p)
 {
+  (void) fftw_mutex();    // constructed before the cache below, so destroyed after it (~GridKernel locks it)
   static std::mutex mtx;
-  static std::map<std::pair<int, int>, std::shared_ptr<const GridKernel>> cache;
-  std::lock_guard<std::mutex> lock(mtx);    // one computation per (k, p), others wait for it
-  auto it = cache.find({k, p});
+  static std::map<std::tuple<double, int, int>, std::shared_ptr<const GridKernel>> cache;
+  const double key = unit.type == KernelType::Yukawa ? unit.kappa : -1.0;
+  std::lock_guard<std::mutex> lock(mtx);    // one computation per (kernel, k, p), others wait for it
+  auto it = cache.find({key, k, p});
   if (it != cache.end()) return it->second;
-  if (cache.size() > 16) cache.clear();
-  auto g = compute_grid_kernel(k, p);
-  cache[{k, p}] = g;
+  if (cache.size() > 16) cache.clear();    // yukawa boxes that keep changing size
+  auto g = compute_grid_kernel(unit, k, p);
+  cache[{key, k, p}] = g;
   return g;
 }
 

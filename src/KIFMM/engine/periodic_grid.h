@@ -1,7 +1,7 @@
 // Periodic (p p p) evaluation on ONE level of k^3 cubic cells (k >= 3 per side), the cheaper
 // choice for small N (about 1e3 .. 3e4 atoms, see cost_model.h): the octree's 4 or 8 leaves
 // per side leave either too many atoms per leaf (near field) or too many M2L translations;
-// 5, 6, 7 ... per side fill the gap. Laplace only.
+// 5, 6, 7 ... per side fill the gap. Laplace and Yukawa.
 //   near field : every cell with itself and its 26 neighbours (images included; k >= 3 makes
 //                them 26 distinct cells), pair by pair for both sides when sources = targets;
 //   far field  : ALL other images of all cells through one convolution. For a target cell t
@@ -10,15 +10,18 @@
 //                surface is well separated from t's check surface), and these images are
 //                summed into one kernel per offset class D = t - s mod k:
 //                  K_D(r) = G_per(r) - sum_{n: |D + k n|_inf <= 1} G(r + 2k n h) - quad |r|^2
-//                sampled on the M2L lattice (G_per: the Ewald sum of the cell, tin-foil, with
-//                the background; quad |r|^2 its non-harmonic part, added exactly at the
-//                targets from the moments as in the octree path). Check(t) = sum_s K_{t-s}
+//                sampled on the M2L lattice (G_per: the Ewald sum of the cell, Laplace tin-foil
+//                with the background, quad |r|^2 its non-harmonic part, added exactly at the
+//                targets from the moments as in the octree path; Yukawa: the screened lattice
+//                sum, quad = 0). Check(t) = sum_s K_{t-s}
 //                (*) equiv(s) is a circular convolution over the cells: a DFT of size k^3 per
 //                surface frequency, so the M2L costs O(k^3 log k) per frequency instead of
 //                O(k^6);
 //   P2M / L2P  : the octree's operators at the cell size.
 // No M2M, L2L or root operator: the far images are all in K_D.
 #pragma once
+
+#include "kifmm.h"
 
 #include <complex>
 #include <cstddef>
@@ -43,8 +46,10 @@ struct GridKernel {
   std::size_t bytes() const { return hat.size() * sizeof(std::complex<double>); }
 };
 
-// Cached per (k, p) in the process (a few tenths of a second to compute at p = 6, k = 5).
-std::shared_ptr<const GridKernel> periodic_grid_kernel(int k, int p);
+// Cached per (kernel, k, p) in the process (a few tenths of a second to compute at p = 6,
+// k = 5). `unit`: the kernel of the unit cell (half-width 1), Laplace or Yukawa with
+// kappa * H (H the half-width of the periodic cell), as lattice_table (periodic.h).
+std::shared_ptr<const GridKernel> periodic_grid_kernel(const KernelSpec &unit, int k, int p);
 
 // In place on the frequencies [f0, f1) (multiples of 16) of z[cell * nfreq + f] (cell-major,
 // so that each cell's spectrum is contiguous): z <- IDFT(hat .* DFT(z)) over the cells.

@@ -20,8 +20,8 @@ template <class K>
 void FmmEvaluator<K>::evaluate_grid(std::size_t ns, const double *sxyz, const double *sq, std::size_t nt,
                                     const double *txyz, double *pot, double *grad, bool same_points)
 {
-  if constexpr (!std::is_same_v<K, LaplaceKernel>) {
-    throw std::invalid_argument("kifmm: the periodic grid (Options::periodic_grid) is for the Laplace kernel");
+  if constexpr (!std::is_same_v<K, LaplaceKernel> && !std::is_same_v<K, YukawaKernel>) {
+    throw std::invalid_argument("kifmm: the periodic grid (Options::periodic_grid) is for the Laplace and Yukawa kernels");
   } else {
     const double t0 = omp_get_wtime();
     grid_bin(ns, sxyz, sq, nt, txyz, same_points, ns);
@@ -42,8 +42,8 @@ template <class K>
 void FmmEvaluator<K>::evaluate_grid_distributed(Communicator &comm, std::size_t n, const double *xyz,
                                                 const double *q, double *pot, double *grad)
 {
-  if constexpr (!std::is_same_v<K, LaplaceKernel>) {
-    throw std::invalid_argument("kifmm: the periodic grid (Options::periodic_grid) is for the Laplace kernel");
+  if constexpr (!std::is_same_v<K, LaplaceKernel> && !std::is_same_v<K, YukawaKernel>) {
+    throw std::invalid_argument("kifmm: the periodic grid (Options::periodic_grid) is for the Laplace and Yukawa kernels");
   } else {
     const double t0 = omp_get_wtime();
     const int k = opt_.periodic_grid;
@@ -175,7 +175,7 @@ void FmmEvaluator<K>::grid_bin(std::size_t ns, const double *sxyz, const double 
 template <class K>
 void FmmEvaluator<K>::grid_passes(Communicator *comm, std::size_t own_sources, bool want_pot, bool same_points)
 {
-  if constexpr (std::is_same_v<K, LaplaceKernel>) {
+  if constexpr (std::is_same_v<K, LaplaceKernel> || std::is_same_v<K, YukawaKernel>) {
     const int k = opt_.periodic_grid;
     const int kc = k * k * k;
     const double H = opt_.root_half_width, w = 2.0 * H / k, h = 0.5 * w;
@@ -200,7 +200,9 @@ void FmmEvaluator<K>::grid_passes(Communicator *comm, std::size_t own_sources, b
     scale_.assign(1, s);
     if (!fft_ || fft_->p() != p_) fft_ = std::make_unique<M2LTransform>(p_);
     const double tg = omp_get_wtime();
-    grid_kernel_ = periodic_grid_kernel(k, p_);
+    KernelSpec unit;    // Laplace, or Yukawa with kappa * H (unit cell)
+    if constexpr (std::is_same_v<K, YukawaKernel>) unit = KernelSpec{KernelType::Yukawa, k_.kappa * H};
+    grid_kernel_ = periodic_grid_kernel(unit, k, p_);
     stats_.t_precompute = t_setup + (omp_get_wtime() - tg);
     stats_.operator_bytes = ops_[0]->bytes() + grid_kernel_->bytes();
     const OperatorSet &op = *ops_[0];
@@ -370,52 +372,54 @@ void FmmEvaluator<K>::grid_passes(Communicator *comm, std::size_t own_sources, b
     periodic_background_moments(quad, c, own_sources);
     reduce(periodic_moments_, 5);
     add_periodic_background(want_pot, c);
-    // The kernels subtract quad |r|^2 at the separation r of the class representative (the
-    // image of the source cell nearest to the target cell, r = x - y + L m with m in
-    // {-1,0,1}^3 per cell pair), the moments above add it back at x - y: add the difference
-    // quad (2 L m.(x - y) + L^2 |m|^2) = quad (2 L (alpha.x - beta) + L^2 gamma) with, per
-    // target cell, alpha_d = sum_s m_d Q_s, beta = sum_s m.P_s, gamma = sum_s |m|^2 Q_s (Q_s,
-    // P_s: charge and dipole of source cell s). m_d depends on the cells' indices along axis d
-    // only: the sums are over the per-axis marginals of Q and P (O(k^2) per axis).
-    std::vector<double> Qa(3 * (std::size_t) k, 0.0), Pa(3 * (std::size_t) k, 0.0);
-    for (int b = 0; b < kc; ++b) {
-      const int sa[3] = {b / (k * k), (b / k) % k, b % k};
-      for (int j = sb[b]; j < own_end[b]; ++j) {
-        const double y[3] = {sx_[j] - c[0], sy_[j] - c[1], sz_[j] - c[2]};
-        for (int d = 0; d < 3; ++d) {
-          Qa[d * k + sa[d]] += sq_[j];
-          Pa[d * k + sa[d]] += sq_[j] * y[d];
+    if (quad != 0.0) {    // Laplace (Yukawa has no background)
+      // The kernels subtract quad |r|^2 at the separation r of the class representative (the
+      // image of the source cell nearest to the target cell, r = x - y + L m with m in
+      // {-1,0,1}^3 per cell pair), the moments above add it back at x - y: add the difference
+      // quad (2 L m.(x - y) + L^2 |m|^2) = quad (2 L (alpha.x - beta) + L^2 gamma) with, per
+      // target cell, alpha_d = sum_s m_d Q_s, beta = sum_s m.P_s, gamma = sum_s |m|^2 Q_s (Q_s,
+      // P_s: charge and dipole of source cell s). m_d depends on the cells' indices along axis d
+      // only: the sums are over the per-axis marginals of Q and P (O(k^2) per axis).
+      std::vector<double> Qa(3 * (std::size_t) k, 0.0), Pa(3 * (std::size_t) k, 0.0);
+      for (int b = 0; b < kc; ++b) {
+        const int sa[3] = {b / (k * k), (b / k) % k, b % k};
+        for (int j = sb[b]; j < own_end[b]; ++j) {
+          const double y[3] = {sx_[j] - c[0], sy_[j] - c[1], sz_[j] - c[2]};
+          for (int d = 0; d < 3; ++d) {
+            Qa[d * k + sa[d]] += sq_[j];
+            Pa[d * k + sa[d]] += sq_[j] * y[d];
+          }
         }
       }
-    }
-    reduce(Qa.data(), Qa.size());
-    reduce(Pa.data(), Pa.size());
-    auto wrap_of = [k](int t, int s) {    // m of the class representative in (-k/2, k/2]
-      const int d = t - s, rep = ((d % k) + k) % k, D = 2 * rep <= k ? rep : rep - k;
-      return (D - d) / k;
-    };
-    std::vector<double> A(3 * (std::size_t) k, 0.0), B(3 * (std::size_t) k, 0.0), C(3 * (std::size_t) k, 0.0);
-    for (int d = 0; d < 3; ++d)
-      for (int t = 0; t < k; ++t)
-        for (int s2 = 0; s2 < k; ++s2) {
-          const int m = wrap_of(t, s2);
-          A[d * k + t] += m * Qa[d * k + s2];
-          B[d * k + t] += m * Pa[d * k + s2];
-          C[d * k + t] += m * m * Qa[d * k + s2];
+      reduce(Qa.data(), Qa.size());
+      reduce(Pa.data(), Pa.size());
+      auto wrap_of = [k](int t, int s) {    // m of the class representative in (-k/2, k/2]
+        const int d = t - s, rep = ((d % k) + k) % k, D = 2 * rep <= k ? rep : rep - k;
+        return (D - d) / k;
+      };
+      std::vector<double> A(3 * (std::size_t) k, 0.0), B(3 * (std::size_t) k, 0.0), C(3 * (std::size_t) k, 0.0);
+      for (int d = 0; d < 3; ++d)
+        for (int t = 0; t < k; ++t)
+          for (int s2 = 0; s2 < k; ++s2) {
+            const int m = wrap_of(t, s2);
+            A[d * k + t] += m * Qa[d * k + s2];
+            B[d * k + t] += m * Pa[d * k + s2];
+            C[d * k + t] += m * m * Qa[d * k + s2];
+          }
+  #pragma omp parallel for schedule(static)
+      for (int t = 0; t < kc; ++t) {
+        const int ta[3] = {t / (k * k), (t / k) % k, t % k};
+        const double alpha[3] = {A[ta[0]], A[k + ta[1]], A[2 * k + ta[2]]};
+        const double beta = B[ta[0]] + B[k + ta[1]] + B[2 * k + ta[2]];
+        const double gamma = C[ta[0]] + C[k + ta[1]] + C[2 * k + ta[2]];
+        for (int i = tb[t]; i < tb[t + 1]; ++i) {
+          const double x[3] = {tx_[i] - c[0], ty_[i] - c[1], tz_[i] - c[2]};
+          if (want_pot)
+            tp_[i] += quad * (2 * L * (alpha[0] * x[0] + alpha[1] * x[1] + alpha[2] * x[2] - beta) + L * L * gamma);
+          tgx_[i] += 2 * quad * L * alpha[0];
+          tgy_[i] += 2 * quad * L * alpha[1];
+          tgz_[i] += 2 * quad * L * alpha[2];
         }
-#pragma omp parallel for schedule(static)
-    for (int t = 0; t < kc; ++t) {
-      const int ta[3] = {t / (k * k), (t / k) % k, t % k};
-      const double alpha[3] = {A[ta[0]], A[k + ta[1]], A[2 * k + ta[2]]};
-      const double beta = B[ta[0]] + B[k + ta[1]] + B[2 * k + ta[2]];
-      const double gamma = C[ta[0]] + C[k + ta[1]] + C[2 * k + ta[2]];
-      for (int i = tb[t]; i < tb[t + 1]; ++i) {
-        const double x[3] = {tx_[i] - c[0], ty_[i] - c[1], tz_[i] - c[2]};
-        if (want_pot)
-          tp_[i] += quad * (2 * L * (alpha[0] * x[0] + alpha[1] * x[1] + alpha[2] * x[2] - beta) + L * L * gamma);
-        tgx_[i] += 2 * quad * L * alpha[0];
-        tgy_[i] += 2 * quad * L * alpha[1];
-        tgz_[i] += 2 * quad * L * alpha[2];
       }
     }
     stats_.tree_bytes = sizeof(double) * (up_equiv_.size() + dn_check_.size() + dn_equiv_.size() + sx_.size() * 4 +

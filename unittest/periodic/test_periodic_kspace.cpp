@@ -125,6 +125,18 @@ class Periodic : public LammpsFixture {
     return {forces_by_id(), thermo("elong")};
   }
 
+  // kifmm with these kspace_modify kifmm keywords at accuracy 1e-12 equals ewald_reference()
+  // (forces and energy to 1e-10)
+  void expect_equals_ewald(const std::string &label, const std::string &modify)
+  {
+    Result ref = ewald_reference();
+    Result r = kifmm("1e-12", modify);
+    const double ef = relative_force_error(r.f, ref.f), ee = rel(r.energy, ref.energy);
+    if (rank() == 0) std::printf("  %s (%s): force %.2e energy %.2e\n", label.c_str(), modify.c_str(), ef, ee);
+    EXPECT_LE(ef, 1e-10) << label;
+    EXPECT_LE(ee, 1e-10) << label;
+  }
+
   template <class... A> static std::string fmt_cmd(const char *f, A... a)
   {
     std::string s(f);
@@ -197,23 +209,13 @@ Configuration shifted_box(Configuration c, double L)
 TEST_F(Periodic, NeutralRandomEqualsEwald)
 {
   load(shifted_box(uniform_cube(1000, 41), 2.0));
-  Result ref = ewald_reference();
-  Result r = kifmm("1e-12", "order 14 leaf 40");
-  const double ef = relative_force_error(r.f, ref.f), ee = rel(r.energy, ref.energy);
-  if (rank() == 0) std::printf("  neutral random: force %.2e energy %.2e (E = %.15g)\n", ef, ee, ref.energy);
-  EXPECT_LE(ef, 1e-10);
-  EXPECT_LE(ee, 1e-10);
+  expect_equals_ewald("neutral random", "order 14 leaf 40");
 }
 
 TEST_F(Periodic, NeutralDipolesEqualEwald)
 {
   load(shifted_box(dipoles(1000, 42, 0.02), 1.0));
-  Result ref = ewald_reference();
-  Result r = kifmm("1e-12", "order 14 leaf 40");
-  const double ef = relative_force_error(r.f, ref.f), ee = rel(r.energy, ref.energy);
-  if (rank() == 0) std::printf("  dipoles: force %.2e energy %.2e\n", ef, ee);
-  EXPECT_LE(ef, 1e-10);
-  EXPECT_LE(ee, 1e-10);
+  expect_equals_ewald("dipoles", "order 14 leaf 40");
 }
 
 TEST_F(Periodic, NetChargeGetsBackgroundAndWarning)
@@ -233,17 +235,12 @@ TEST_F(Periodic, NetChargeGetsBackgroundAndWarning)
   if (rank() == 0) EXPECT_NE(out.find("neutralizing background"), std::string::npos) << out;
 }
 
-// The single-level grid (kspace_modify kifmm grid K; serial, several ranks use the octree):
-// neutral random atoms, cancelling dipoles and a net charge equal ewald at 1e-10
+// The single-level grid (kspace_modify kifmm grid K; distributed on several ranks): neutral
+// random atoms, cancelling dipoles and a net charge equal ewald at 1e-10
 TEST_F(Periodic, GridEqualsEwaldOnNeutralRandom)
 {
   load(shifted_box(uniform_cube(1000, 41), 2.0));
-  Result ref = ewald_reference();
-  Result r = kifmm("1e-12", "order 14 grid 5");
-  const double ef = relative_force_error(r.f, ref.f), ee = rel(r.energy, ref.energy);
-  if (rank() == 0) std::printf("  grid 5^3, neutral random: force %.2e energy %.2e\n", ef, ee);
-  EXPECT_LE(ef, 1e-10);
-  EXPECT_LE(ee, 1e-10);
+  expect_equals_ewald("grid, neutral random", "order 14 grid 5");
   auto *ks = dynamic_cast<LAMMPS_NS::KSpaceKIFMM *>(lmp->force->kspace);
   ASSERT_NE(ks, nullptr);
   int nprocs = 1;
@@ -260,12 +257,7 @@ TEST_F(Periodic, GridEqualsEwaldOnDipolesWithNetCharge)
     c.q.push_back(0.25);
   }
   load(c);
-  Result ref = ewald_reference();
-  Result r = kifmm("1e-12", "order 14 grid 4");
-  const double ef = relative_force_error(r.f, ref.f), ee = rel(r.energy, ref.energy);
-  if (rank() == 0) std::printf("  grid 4^3, dipoles + net charge 50: force %.2e energy %.2e\n", ef, ee);
-  EXPECT_LE(ef, 1e-10);
-  EXPECT_LE(ee, 1e-10);
+  expect_equals_ewald("grid, dipoles + net charge 50", "order 14 grid 4");
 }
 
 TEST_F(Periodic, CompleteLammpsEwaldWithCoulLong)

@@ -24,6 +24,12 @@ std::string check_pebbles(const std::vector<Sphere> &s, const std::vector<long> 
           << " (must be finite and > 0)";
       return msg.str();
     }
+    // the moments of inertia grow as r^5: outside this range they overflow or underflow
+    if (s[i].r < 1e-60 || s[i].r > 1e60) {
+      msg << "pebble " << name(i) << " has diameter " << 2.0 * s[i].r
+          << " (must be between 2e-60 and 2e60: its moments of inertia would not fit a double)";
+      return msg.str();
+    }
     rmin = i == 0 ? s[i].r : std::min(rmin, s[i].r);
     rmax = std::max(rmax, s[i].r);
   }

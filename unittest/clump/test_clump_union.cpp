@@ -192,7 +192,8 @@ TEST(ClumpUnion, DuplicatePebblesAreFound)
 // that overflows to +-inf (e.g. "1e400", which LAMMPS's molecule reader accepts), or
 // coordinates around 1e300, made the duplicate search convert an out-of-range double to long
 // (UBSan: "-inf is outside the range of representable values of type 'long'"). Every such
-// template is now refused with a message naming the pebble.
+// template is now refused with a message naming the pebble. Radii outside [1e-60, 1e60] too
+// (their volume or moments of inertia overflow or underflow).
 TEST(ClumpTemplate, FuzzFindingsAreClearErrors)
 {
   using clump::check_pebbles;
@@ -225,9 +226,15 @@ TEST(ClumpTemplate, FuzzFindingsAreClearErrors)
   EXPECT_EQ(check_pebbles(s), "pebble 2 has diameter 0 (must be finite and > 0)");
   s[1].r = nan;
   EXPECT_EQ(check_pebbles(s), "pebble 2 has diameter nan (must be finite and > 0)");
-  s[1].r = 5e-303;    // regression-radius-ratio
-  EXPECT_EQ(check_pebbles(s),
-            "pebble diameters from 1e-302 to 0.01: a ratio above 1e+06 is not supported");
+  s[1].r = 5e-303;    // regression-radius-ratio: now outside the representable range
+  EXPECT_EQ(check_pebbles(s), "pebble 2 has diameter 1e-302 (must be between 2e-60 and 2e60: its moments of "
+                              "inertia would not fit a double)");
+  s[1].r = 1e-9;
+  EXPECT_EQ(check_pebbles(s), "pebble diameters from 2e-09 to 0.01: a ratio above 1e+06 is not supported");
+  // regression-huge-radius (CI fuzzing, session 8): one pebble of radius 5e299 passed the
+  // checks and its volume overflowed to inf in union_mass_properties
+  EXPECT_EQ(check_pebbles({{{0, 0, 0}, 5e299}}), "pebble 1 has diameter 1e+300 (must be between 2e-60 and 2e60: its "
+                                                  "moments of inertia would not fit a double)");
   EXPECT_EQ(check_pebbles({}), "no pebbles");
 }
 

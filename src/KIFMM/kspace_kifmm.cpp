@@ -168,10 +168,10 @@ void KSpaceKIFMM::init()
     opt.cache_dir = kset.cache_dir.empty() ? default_cache_dir() : kset.cache_dir;
   opt.periodic = periodic;
   // periodic single-level grid: given by kspace_modify kifmm grid K, or (grid auto, no leaf
-  // size given; coulomb and gravity, whose grid kernels do not depend on the box size) chosen
-  // with the tree below
+  // size given) chosen with the tree below (yukawa: back to the octree when the box changes
+  // size, periodic_cell)
   opt.periodic_grid = 0;
-  const bool grid_auto = periodic && kset.grid < 0 && kset.kernel != LongRangeKernel::Yukawa;
+  const bool grid_auto = periodic && kset.grid < 0;
   if (kset.grid > 0) {
     if (!periodic)
       error->all(FLERR, "kspace_modify kifmm grid {}: the single-level grid needs periodic boundaries "

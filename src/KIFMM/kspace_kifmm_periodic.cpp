@@ -85,6 +85,24 @@ void KSpaceKIFMM::periodic_cell()
   const double center[3] = {0.5 * (domain->boxlo[0] + domain->boxhi[0]),
                             0.5 * (domain->boxlo[1] + domain->boxhi[1]),
                             0.5 * (domain->boxlo[2] + domain->boxhi[2])};
+  // yukawa on a grid chosen by the cost model (grid auto): its grid kernels depend on kappa
+  // times the box length and would be computed again (0.1-0.5 s) at every change of the box
+  // size: the first change switches to the octree (same order and leaf size)
+  const kifmm::Options &o = engine->options();
+  if (kset.kernel == LongRangeKernel::Yukawa && kset.grid < 0 && o.periodic_grid > 0 && o.fixed_root &&
+      o.root_half_width != 0.5 * lx) {
+    kifmm::Options octree = o;
+    octree.periodic_grid = 0;
+    engine = kifmm::make_evaluator(engine->kernel(), octree);
+    engine_options = engine->options();
+    reported_first_evaluation = false;
+    if (comm->me == 0)
+      utils::logmesg(lmp,
+                     "  KIFMM: the box changes size (step {}): kernel yukawa switches from the "
+                     "single-level grid to the octree (leaf size {}), whose tables do not depend on "
+                     "the box length\n",
+                     update->ntimestep, engine_options.leaf_size);
+  }
   engine->set_root(center, 0.5 * lx);
 }
 

@@ -218,8 +218,8 @@ TEST(PeriodicGrid, CostModelChoice)
   const kifmm::TreeChoice c = kifmm::choose_tree(KernelSpec{}, o, p.size(), p.xyz.data());
   EXPECT_GE(c.grid, 4);
   EXPECT_LE(c.grid, kifmm::max_grid_cells(6));
-  // Yukawa: the octree unless asked for (its grid kernels are recomputed when the box changes)
-  EXPECT_EQ(kifmm::choose_tree(KernelSpec{kifmm::KernelType::Yukawa, 2.0}, o, p.size(), p.xyz.data()).grid, 0);
+  // Yukawa too (same counts and constants)
+  EXPECT_EQ(kifmm::choose_tree(KernelSpec{kifmm::KernelType::Yukawa, 2.0}, o, p.size(), p.xyz.data()).grid, c.grid);
   // the octree's choice is kept beside it (distributed evaluation): a depth >= 2 tree
   EXPECT_GE(c.depth, 2);
   EXPECT_LT(c.leaf_size, (int) p.size());

@@ -518,6 +518,27 @@ TEST_F(Periodic, GridNeedsPeriodicBoundaries)
   EXPECT_LAMMPS_ERROR(command("run 0"), "grid 4: the single-level grid needs periodic boundaries");
 }
 
+// yukawa on the grid chosen by the cost model: the first change of the box size switches to
+// the octree (the grid kernels depend on kappa times the box length)
+TEST_F(Periodic, YukawaAutoGridSwitchesToTheOctreeWhenTheBoxChanges)
+{
+  int nprocs = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &nprocs);
+  if (nprocs > 1) GTEST_SKIP() << "one-rank choice";
+  load(uniform_cube(3000, 57));
+  commands("pair_style zero 0.01\npair_coeff * *\nkspace_style kifmm 1e-5\nkspace_modify kifmm kernel yukawa 4.0");
+  std::string out = output_of("run 0 post no");
+  auto *ks = dynamic_cast<LAMMPS_NS::KSpaceKIFMM *>(lmp->force->kspace);
+  ASSERT_NE(ks, nullptr);
+  EXPECT_NE(out.find("KIFMM periodic single-level grid of"), std::string::npos) << out;
+  const std::size_t cells = ks->engine_stats().n_leaves;
+  EXPECT_EQ(ks->engine_stats().depth, 0);
+  command("fix grow all deform 1 x final 0 1.1 y final 0 1.1 z final 0 1.1 remap x");
+  out = output_of("run 3 post no");
+  EXPECT_NE(out.find("kernel yukawa switches from the single-level grid to the octree"), std::string::npos) << out;
+  EXPECT_GE(ks->engine_stats().depth, 1) << "octree after the switch (grid had " << cells << " cells)";
+}
+
 TEST_F(Periodic, GridValueIsChecked)
 {
   load(uniform_cube(50, 56));

@@ -438,13 +438,13 @@ TreeChoice choose_tree(const KernelSpec &kernel, const Options &options, std::si
     if (best.leaf_size == 0 || c.cost < best.cost) best = c;
   }
   TreeChoice tree = best.leaf_size != 0 && best.cost < (1 - kChoiceMargin) * start.cost ? best : start;
-  // periodic Laplace (Yukawa only when asked for: its grid kernels depend on kappa times the
-  // cell size and are recomputed, 0.1-0.5 s, whenever the box changes size): the
-  // single-level grid of least modelled cost, unless the octree is
+  // periodic (Yukawa: its grid kernels depend on kappa times the cell size, and kspace_style
+  // kifmm goes back to the octree when the box changes size): the single-level grid of least
+  // modelled cost, unless the octree is
   // modelled cheaper by the margin (the model underestimates the periodic octree at small N:
   // 3e3 atoms, order 6, depth 2: modelled 0.0056 s, measured 0.0081 s, where the grid of 4^3
   // cells is modelled 0.0057 s and measured 0.0047-0.0053 s; bench_periodic)
-  if (options.periodic && kernel.type == KernelType::Laplace) {
+  if (options.periodic) {
     TreeChoice grid{tree.leaf_size, tree.depth, 0.0, 0};
     for (int k = 3; k <= max_grid_cells(options.order) && (double) k * k * k <= (double) n; ++k) {
       const double c = modelled_grid_cost(

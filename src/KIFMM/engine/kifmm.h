@@ -123,7 +123,7 @@ struct TreeChoice {
   int grid = 0;       // periodic: cells per side of the single-level grid (Options::periodic_grid)
                       // that is cheaper than the octree; 0 = the octree (leaf_size, depth)
 };
-// grid (periodic; the caller passes it for the Laplace kernel): also the single-level grids
+// grid (periodic): also the single-level grids
 // k = 3 .. max_grid_cells(order) on uniform counts (cost_model.h), chosen with the rule of the
 // choice from the points below (TreeChoice::grid; the octree's leaf size and depth are kept).
 TreeChoice choose_tree(int order, std::size_t n, bool periodic, bool grid = false);
@@ -138,7 +138,7 @@ TreeChoice choose_tree(int order, std::size_t n, bool periodic, bool grid = fals
 // residuals are 4-8 %). depth: of the actual tree. Deterministic for the same points; one
 // process's points only, so the distributed evaluation (each rank holds its own atoms) keeps
 // the uniform choice above. Costs a few tree builds (bench_engine --tree-choice: "choice s").
-// Periodic Laplace: also the single-level grids of k^3 cells, k = 3 .. max_grid_cells(order)
+// Periodic: also the single-level grids of k^3 cells, k = 3 .. max_grid_cells(order)
 // (cost_model.h, counts of the actual cell occupancies); a grid is returned (grid = k, with
 // the octree's leaf size and depth kept for the distributed evaluation) when it is modelled
 // cheaper than the chosen octree by the same margin.

@@ -7,6 +7,7 @@
 #include "m2l_fft.h"
 #include "octree.h"
 #include "periodic.h"
+#include "periodic_grid.h"
 #include "surface.h"
 
 #include <algorithm>
@@ -284,23 +285,16 @@ TreeCounts uniform_grid_counts(std::size_t n, int k)
 TreeCounts grid_counts(std::size_t n, const double *xyz, const double center[3], double half_width, int k)
 {
   const int kc = k * k * k;
-  const double w = 2 * half_width / k;
   std::vector<double> occ(kc, 0.0);
-  for (std::size_t i = 0; i < n; ++i) {
-    int a[3];
-    for (int d = 0; d < 3; ++d)
-      a[d] = std::min(k - 1, std::max(0, (int) std::floor((xyz[3 * i + d] - (center[d] - half_width)) / w)));
-    occ[(a[0] * k + a[1]) * k + a[2]] += 1;
-  }
+  for (std::size_t i = 0; i < n; ++i) occ[grid_cell_index(xyz + 3 * i, center, half_width, k)] += 1;
   TreeCounts t;
   t.cells = kc;
   t.entries = 14.0 * kc;
   for (int b = 0; b < kc; ++b) {
     if (occ[b] == 0) continue;
-    const int a[3] = {b / (k * k), (b / k) % k, b % k};
     for (int o = 0; o < 27; ++o) {
-      const int c[3] = {(a[0] + o / 9 - 1 + k) % k, (a[1] + (o / 3) % 3 - 1 + k) % k, (a[2] + o % 3 - 1 + k) % k};
-      t.near_pairs += occ[b] * occ[(c[0] * k + c[1]) * k + c[2]] / 2;
+      signed char sh[3];
+      t.near_pairs += occ[b] * occ[grid_neighbour_cell(b, k, o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, sh)] / 2;
     }
     t.self_pairs += occ[b] * occ[b] / 2;
   }

@@ -149,6 +149,7 @@ template <class K> class FmmEvaluator : public Evaluator {
   std::shared_ptr<const GridKernel> grid_kernel_;
   std::vector<int> grid_src_begin_, grid_trg_begin_;    // per cell, sorted order (+ end)
   std::vector<int> grid_own_end_;                       // per cell: end of its own sources
+  GridBuffer grid_spectra_;                             // spectra of all cells (convolution)
   void evaluate_grid(std::size_t ns, const double *sxyz, const double *sq, std::size_t nt, const double *txyz,
                      double *pot, double *grad, bool same_points);
   void evaluate_grid_distributed(Communicator &comm, std::size_t n, const double *xyz, const double *q, double *pot,

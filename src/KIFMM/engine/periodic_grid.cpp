@@ -30,7 +30,10 @@ std::complex<double> *grid_alloc(std::size_t n)
   return z;
 }
 
-void grid_free(std::complex<double> *z) { fftw_free(reinterpret_cast<fftw_complex *>(z)); }
+void grid_free(std::complex<double> *z)
+{
+  if (z) fftw_free(reinterpret_cast<fftw_complex *>(z));
+}
 
 void grid_convolve(const GridKernel &g, std::complex<double> *z, int f0, int f1)
 {
@@ -63,7 +66,7 @@ std::vector<double> grid_kernel_values(const KernelSpec &unit, int k, int p)
   std::vector<double> u(nc);   // unit-cell coordinate (r / k)
   for (int a = 0; a < k; ++a)
     for (int i = 0; i < m; ++i) {
-      const int D = 2 * a <= k ? a : a - k;
+      const int D = grid_class_representative(a, k);
       rep[a * m + i] = D;
       u[a * m + i] = (2.0 * D + (i - (p - 1)) * dx) / k;
     }

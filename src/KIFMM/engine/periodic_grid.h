@@ -23,6 +23,8 @@
 
 #include "kifmm.h"
 
+#include <algorithm>
+#include <cmath>
 #include <complex>
 #include <cstddef>
 #include <memory>
@@ -46,6 +48,36 @@ struct GridKernel {
   std::size_t bytes() const { return hat.size() * sizeof(std::complex<double>); }
 };
 
+// Cell index (a0 k + a1) k + a2 of a point of the cell [c - H, c + H)^3 in the grid of k^3
+// cells (points on the upper faces or outside are clamped into the boundary cells).
+inline int grid_cell_index(const double x[3], const double c[3], double H, int k)
+{
+  const double w = 2.0 * H / k;
+  int a[3];
+  for (int d = 0; d < 3; ++d) a[d] = std::min(k - 1, std::max(0, (int) std::floor((x[d] - (c[d] - H)) / w)));
+  return (a[0] * k + a[1]) * k + a[2];
+}
+
+// Representative in (-k/2, k/2] of the cell offset class a mod k (the nearest image)
+inline int grid_class_representative(int a, int k)
+{
+  const int r = ((a % k) + k) % k;
+  return 2 * r <= k ? r : r - k;
+}
+
+// The cell at offset (dx, dy, dz) in {-1,0,1}^3 of cell b, periodically; sh: the root shift of
+// that image (-1, 0 or 1 per axis).
+inline int grid_neighbour_cell(int b, int k, int dx, int dy, int dz, signed char sh[3])
+{
+  const int a[3] = {b / (k * k) + dx, (b / k) % k + dy, b % k + dz};
+  int w[3];
+  for (int d = 0; d < 3; ++d) {
+    sh[d] = (signed char) (a[d] < 0 ? -1 : a[d] >= k ? 1 : 0);
+    w[d] = a[d] - sh[d] * k;
+  }
+  return (w[0] * k + w[1]) * k + w[2];
+}
+
 // Cached per (kernel, k, p) in the process (a few tenths of a second to compute at p = 6,
 // k = 5). `unit`: the kernel of the unit cell (half-width 1), Laplace or Yukawa with
 // kappa * H (H the half-width of the periodic cell), as lattice_table (periodic.h).
@@ -59,5 +91,31 @@ void grid_convolve(const GridKernel &g, std::complex<double> *z, int f0, int f1)
 // Allocation with FFTW's alignment (the plans are made for it).
 std::complex<double> *grid_alloc(std::size_t n);
 void grid_free(std::complex<double> *z);
+
+// The spectra of all cells, kept between evaluations (tens of MB: a new allocation would
+// page-fault at every evaluation); grows only.
+class GridBuffer {
+ public:
+  GridBuffer() = default;
+  GridBuffer(const GridBuffer &) = delete;
+  GridBuffer &operator=(const GridBuffer &) = delete;
+  ~GridBuffer() { grid_free(z_); }
+  std::complex<double> *get(std::size_t n)
+  {
+    if (n > size_) {
+      grid_free(z_);
+      z_ = nullptr;
+      size_ = 0;
+      z_ = grid_alloc(n);
+      size_ = n;
+    }
+    return z_;
+  }
+  std::size_t bytes() const { return size_ * sizeof(std::complex<double>); }
+
+ private:
+  std::complex<double> *z_ = nullptr;
+  std::size_t size_ = 0;
+};
 
 }    // namespace kifmm

@@ -66,6 +66,8 @@ void FmmEvaluator<K>::evaluate_grid_distributed(Communicator &comm, std::size_t 
         sq.push_back(q[i]);
       }
     const std::size_t own = sq.size();
+    std::vector<int> own_cell(own);
+    for (std::size_t j = 0; j < own; ++j) own_cell[j] = grid_cell_of(&sxyz[3 * j]);
     const int nr = comm.size(), me = comm.rank();
     std::vector<std::vector<double>> send(nr), recv;
     std::vector<char> near(kc);
@@ -78,7 +80,7 @@ void FmmEvaluator<K>::evaluate_grid_distributed(Communicator &comm, std::size_t 
           near[grid_neighbour(all_cells[e], o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, sh)] = 1;
         }
       for (std::size_t j = 0; j < own; ++j)
-        if (near[grid_cell_of(&sxyz[3 * j])]) send[r].insert(send[r].end(), {sxyz[3 * j], sxyz[3 * j + 1], sxyz[3 * j + 2], sq[j]});
+        if (near[own_cell[j]]) send[r].insert(send[r].end(), {sxyz[3 * j], sxyz[3 * j + 1], sxyz[3 * j + 2], sq[j]});
     }
     tc = omp_get_wtime();
     comm.alltoallv(send, recv);
@@ -113,24 +115,12 @@ void FmmEvaluator<K>::evaluate_grid_distributed(Communicator &comm, std::size_t 
 
 template <class K> int FmmEvaluator<K>::grid_cell_of(const double *x) const
 {
-  const int k = opt_.periodic_grid;
-  const double H = opt_.root_half_width, w = 2.0 * H / k, *c = opt_.root_center;
-  int a[3];
-  for (int d = 0; d < 3; ++d) a[d] = std::min(k - 1, std::max(0, (int) std::floor((x[d] - (c[d] - H)) / w)));
-  return (a[0] * k + a[1]) * k + a[2];
+  return grid_cell_index(x, opt_.root_center, opt_.root_half_width, opt_.periodic_grid);
 }
 
-// cell at offset (dx, dy, dz) of cell b, and the root shift of that image in sh
 template <class K> int FmmEvaluator<K>::grid_neighbour(int b, int dx, int dy, int dz, signed char sh[3]) const
 {
-  const int k = opt_.periodic_grid;
-  const int a[3] = {b / (k * k) + dx, (b / k) % k + dy, b % k + dz};
-  int w3[3];
-  for (int d = 0; d < 3; ++d) {
-    sh[d] = (signed char) (a[d] < 0 ? -1 : a[d] >= k ? 1 : 0);
-    w3[d] = a[d] - sh[d] * k;
-  }
-  return (w3[0] * k + w3[1]) * k + w3[2];
+  return grid_neighbour_cell(b, opt_.periodic_grid, dx, dy, dz, sh);
 }
 
 // Points sorted by cell (stable counting sort: within a cell the input order, so the own
@@ -250,7 +240,7 @@ void FmmEvaluator<K>::grid_passes(Communicator *comm, std::size_t own_sources, b
     double t3 = omp_get_wtime();
     stats_.t_upward = t3 - t2;
     // ---- M2L: surface spectra of all cells -> convolution over the cells -> check potentials
-    std::complex<double> *z = grid_alloc((std::size_t) nf * kc);
+    std::complex<double> *z = grid_spectra_.get((std::size_t) nf * kc);
     const int nblk = nf / 16;
 #pragma omp parallel
     {
@@ -280,7 +270,6 @@ void FmmEvaluator<K>::grid_passes(Communicator *comm, std::size_t own_sources, b
         fft_->inverse_add(chunk.data(), 32, dcheck(b), s, ws);
       }
     }
-    grid_free(z);
     double t4 = omp_get_wtime();
     stats_.t_m2l = t4 - t3;
     // ---- check -> downward equivalent (batched), L2P
@@ -393,10 +382,7 @@ void FmmEvaluator<K>::grid_passes(Communicator *comm, std::size_t own_sources, b
       }
       reduce(Qa.data(), Qa.size());
       reduce(Pa.data(), Pa.size());
-      auto wrap_of = [k](int t, int s) {    // m of the class representative in (-k/2, k/2]
-        const int d = t - s, rep = ((d % k) + k) % k, D = 2 * rep <= k ? rep : rep - k;
-        return (D - d) / k;
-      };
+      auto wrap_of = [k](int t, int s) { return (grid_class_representative(t - s, k) - (t - s)) / k; };
       std::vector<double> A(3 * (std::size_t) k, 0.0), B(3 * (std::size_t) k, 0.0), C(3 * (std::size_t) k, 0.0);
       for (int d = 0; d < 3; ++d)
         for (int t = 0; t < k; ++t)
@@ -422,7 +408,7 @@ void FmmEvaluator<K>::grid_passes(Communicator *comm, std::size_t own_sources, b
         }
       }
     }
-    stats_.tree_bytes = sizeof(double) * (up_equiv_.size() + dn_check_.size() + dn_equiv_.size() + sx_.size() * 4 +
+    stats_.tree_bytes = grid_spectra_.bytes() + sizeof(double) * (up_equiv_.size() + dn_check_.size() + dn_equiv_.size() + sx_.size() * 4 +
                                           tx_.size() * 7);
   } else {
     (void) comm;

@@ -1,6 +1,7 @@
 #include "kspace_kifmm.h"
 
 #include "fix_kifmm_stride.h"
+#include "kifmm_rigid_bodies.h"
 #include "mpi_communicator.h"
 #include "periodic.h"
 
@@ -34,7 +35,7 @@ std::string default_cache_dir()
   if (const char *home = std::getenv("HOME")) return std::string(home) + "/.cache/lammps-kifmm";
   return "";
 }
-const char *error_variable = "kifmm_error";
+const char *error_variable = "kifmm_error";    // also in kspace_kifmm_error.cpp
 const char *timing_fix_id = "KIFMM_TIMING";
 }    // namespace
 
@@ -125,6 +126,7 @@ void KSpaceKIFMM::init()
   }
 
   stride = nullptr;    // fix kifmm/stride re-attaches in its init
+  find_rigid_bodies();    // fix clump/rigid: pairs inside a clump are left out
   qqrd2e = force->qqrd2e;
   scale = 1.0;
   if (kset.kernel != LongRangeKernel::Gravity) qsum_qsq(0);
@@ -202,6 +204,14 @@ void KSpaceKIFMM::init()
   }
   engine_options = engine->options();
   estimated_error = est;
+  // order from the accuracy: measured on the atoms at the first evaluation, raised if needed
+  verify_pending = est >= 0;
+  if (est > kset.accuracy && comm->me == 0)
+    error->warning(FLERR,
+                   "kspace_style kifmm: the requested accuracy {:.3g} is below what the highest "
+                   "calibrated order {} reaches ({:.3g} in the calibration); it is measured on the "
+                   "atoms at the first evaluation",
+                   kset.accuracy, opt.order, est);
   kcomm = std::make_unique<kifmm::MpiCommunicator>(world);
 
   // the end-of-run time breakdown is printed by an internal fix (fixes get post_run)
@@ -358,6 +368,30 @@ void KSpaceKIFMM::gather_points()
   }
 }
 
+void KSpaceKIFMM::evaluate_points(bool want_potential, double &comm_time, std::size_t &nsrc)
+{
+  const std::size_t n = index.size();
+  pot.assign(want_potential ? n : 0, 0.0);
+  grad.assign(3 * n, 0.0);
+  comm_time = 0;
+  if (distributed()) {
+    // each rank passes its own atoms (collective; ghosts are exchanged inside)
+    check_memory(n);
+    engine->evaluate_distributed(*kcomm, n, xyz.data(), strength.data(),
+                                 want_potential ? pot.data() : nullptr, grad.data());
+    comm_time = engine->stats().t_comm;
+    nsrc = engine->stats().n_sources;
+  } else {
+    // one rank: its atoms are the sources and the targets
+    nsrc = strength.size();
+    check_memory(nsrc);
+    if (nsrc > 0)
+      engine->evaluate(nsrc, xyz.data(), strength.data(), n, xyz.data(),
+                       want_potential ? pot.data() : nullptr, grad.data());
+  }
+  subtract_body_pairs(want_potential);
+}
+
 bool KSpaceKIFMM::distributed() const
 {
   return comm->nprocs > 1;
@@ -406,25 +440,11 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   if (periodic) periodic_cell();    // the box is the cell (it may have changed)
   if (tree_choice_pending) choose_tree_from_atoms();
   const bool want_potential = eflag_global || eflag_atom || keep || (periodic && vflag_global);
-  pot.assign(want_potential ? n : 0, 0.0);
-  grad.assign(3 * n, 0.0);
+  prepare_rigid_bodies();
   double comm_time = 0;
   std::size_t nsrc = 0;    // sources of all ranks (same value on every rank)
-  if (distributed()) {
-    // each rank passes its own atoms (collective; ghosts are exchanged inside)
-    check_memory(n);
-    engine->evaluate_distributed(*kcomm, n, xyz.data(), strength.data(),
-                                 want_potential ? pot.data() : nullptr, grad.data());
-    comm_time = engine->stats().t_comm;
-    nsrc = engine->stats().n_sources;
-  } else {
-    // one rank: its atoms are the sources and the targets
-    nsrc = strength.size();
-    check_memory(nsrc);
-    if (nsrc > 0)
-      engine->evaluate(nsrc, xyz.data(), strength.data(), n, xyz.data(),
-                       want_potential ? pot.data() : nullptr, grad.data());
-  }
+  evaluate_points(want_potential, comm_time, nsrc);
+  if (verify_pending) verify_accuracy(want_potential, comm_time, nsrc);
   const kifmm::Stats no_work;
   const kifmm::Stats &phases = nsrc > 0 || distributed() ? engine->stats() : no_work;
 
@@ -520,6 +540,13 @@ void KSpaceKIFMM::per_atom_virial(double cf, double center[3])
       // F_i,b = cf s_i grad_b ; sum_j x_j,a F_ij,b = cf s_i g_b
       double w[3];
       for (int b = 0; b < 3; ++b) w[b] = 0.5 * (xa * cf * s * grad[3 * k + b] - cf * s * g[3 * k + b]);
+      if (!point_body.empty() && point_body[k]) {
+        // pairs inside the body left out: grad has lost their gradient (add x_a times it
+        // back), and their pair virial 1/2 cf s T_ab goes
+        const double *o = &body_pairs[(std::size_t) KIFMMRigidBodies::nvalues * k];
+        const int row[3][3] = {{4, 7, 8}, {7, 5, 9}, {8, 9, 6}};
+        for (int b = 0; b < 3; ++b) w[b] += 0.5 * cf * s * (xa * o[b] - o[row[a][b]]);
+      }
       // LAMMPS order: xx, yy, zz, xy, xz, yz
       if (a == 0) {
         vatom[i][0] += w[0];
@@ -533,84 +560,6 @@ void KSpaceKIFMM::per_atom_virial(double cf, double center[3])
       }
     }
   }
-}
-
-void KSpaceKIFMM::check_error()
-{
-  // exact gradient on a random sample of this rank's points, by direct summation over all
-  // sources (periodic: the Ewald sum); error = ||F_fmm - F_exact|| / ||F_exact|| over the sample
-  const std::size_t n = index.size();
-  bigint ntotal = 0, nmine = (bigint) n;
-  MPI_Allreduce(&nmine, &ntotal, 1, MPI_LMP_BIGINT, MPI_SUM, world);
-  std::vector<std::size_t> sample;
-  if (ntotal > 0 && n > 0) {
-    std::size_t want = (std::size_t) std::ceil((double) kset.check_samples * n / (double) ntotal);
-    want = std::min(want, n);
-    std::mt19937_64 rng(1234567ULL + 7919ULL * (unsigned long long) update->ntimestep +
-                        104729ULL * (unsigned long long) comm->me);
-    if (want == n)
-      for (std::size_t k = 0; k < n; ++k) sample.push_back(k);
-    else {
-      std::uniform_int_distribution<std::size_t> pick(0, n - 1);
-      for (std::size_t k = 0; k < want; ++k) sample.push_back(pick(rng));
-    }
-  }
-  std::vector<double> txyz(3 * sample.size()), exact(3 * sample.size(), 0.0);
-  for (std::size_t k = 0; k < sample.size(); ++k)
-    for (int d = 0; d < 3; ++d) txyz[3 * k + d] = xyz[3 * sample[k] + d];
-  if (distributed()) {
-    // the samples of all ranks on every rank (small); each rank sums its own atoms on them
-    // (both references are linear in the sources)
-    int mine = (int) sample.size(), nprocs = comm->nprocs;
-    std::vector<int> counts(nprocs), displs(nprocs);
-    MPI_Allgather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, world);
-    int total = 0, offset = 0;
-    for (int p = 0; p < nprocs; ++p) {
-      displs[p] = 3 * total;
-      if (p == comm->me) offset = total;
-      total += counts[p];
-      counts[p] *= 3;
-    }
-    std::vector<double> all_t(3 * (std::size_t) total), all_g(3 * (std::size_t) total, 0.0);
-    MPI_Allgatherv(txyz.data(), 3 * mine, MPI_DOUBLE, all_t.data(), counts.data(), displs.data(),
-                   MPI_DOUBLE, world);
-    if (total > 0 && !strength.empty() && periodic)
-      kifmm::periodic_direct_sum(engine->kernel(), engine->options().root_center,
-                                 engine->options().root_half_width, strength.size(), xyz.data(),
-                                 strength.data(), (std::size_t) total, all_t.data(), nullptr,
-                                 all_g.data());
-    else if (total > 0 && !strength.empty())
-      kifmm::direct_sum(engine->kernel(), strength.size(), xyz.data(), strength.data(),
-                        (std::size_t) total, all_t.data(), nullptr, all_g.data());
-    if (total > 0)
-      MPI_Allreduce(MPI_IN_PLACE, all_g.data(), 3 * total, MPI_DOUBLE, MPI_SUM, world);
-    std::copy(all_g.begin() + 3 * (std::size_t) offset,
-              all_g.begin() + 3 * ((std::size_t) offset + sample.size()), exact.begin());
-  } else if (!sample.empty() && periodic)    // Ewald reference (engine/periodic.h)
-    kifmm::periodic_direct_sum(engine->kernel(), engine->options().root_center,
-                               engine->options().root_half_width, strength.size(), xyz.data(),
-                               strength.data(), sample.size(), txyz.data(), nullptr, exact.data());
-  else if (!sample.empty())
-    kifmm::direct_sum(engine->kernel(), strength.size(), xyz.data(), strength.data(),
-                      sample.size(), txyz.data(), nullptr, exact.data());
-  double sums[2] = {0, 0};
-  for (std::size_t k = 0; k < sample.size(); ++k) {
-    const double s = strength[sample[k]];
-    for (int d = 0; d < 3; ++d) {
-      const double e = exact[3 * k + d] * s, a = grad[3 * sample[k] + d] * s;
-      sums[0] += (a - e) * (a - e);
-      sums[1] += e * e;
-    }
-  }
-  double tot[2];
-  MPI_Allreduce(sums, tot, 2, MPI_DOUBLE, MPI_SUM, world);
-  last_measured_error = tot[1] > 0 ? std::sqrt(tot[0] / tot[1]) : 0.0;
-  int ivar = input->variable->find(error_variable);
-  if (ivar >= 0) input->variable->internal_set(ivar, last_measured_error);
-  if (comm->me == 0)
-    utils::logmesg(lmp, "KIFMM check at step {}: measured relative force error {:.3e} on {} atoms\n",
-                   update->ntimestep, last_measured_error,
-                   std::min<bigint>(ntotal, kset.check_samples));
 }
 
 void KSpaceKIFMM::report_first_evaluation()

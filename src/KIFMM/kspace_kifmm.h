@@ -13,6 +13,7 @@
 #include "kspace.h"
 
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace LAMMPS_NS {
@@ -63,8 +64,37 @@ class KSpaceKIFMM : public KSpace {
   double force_prefactor() const;    // F_i = prefactor * s_i * grad_i
   double energy_prefactor() const;   // E = prefactor * 0.5 * sum s_i phi_i
   void gather_points();
+  // engine evaluation of the gathered points (then the pairs inside rigid bodies subtracted)
+  void evaluate_points(bool want_potential, double &comm_time, std::size_t &nsrc);
   void per_atom_virial(double prefactor, double center[3]);
+
+  // measured error (kspace_kifmm_error.cpp): sampled against the exact sum, on free atoms'
+  // forces and on rigid clumps' net forces and torques (negative: nothing of that kind)
+  struct MeasuredError {
+    double atoms = -1, clump_force = -1, clump_torque = -1;
+    bigint natoms = 0, nclumps = 0;
+    double worst() const;
+    std::string describe() const;
+  };
+  MeasuredError measure_error(int nsamples);
   void check_error();
+  // order from the accuracy: at the first evaluation of a run the error is measured on the
+  // atoms and the order raised until the request is met
+  static constexpr int verify_samples = 400;
+  bool verify_pending = false;
+  double verified_error = -1.0;
+  void verify_accuracy(bool want_potential, double &comm_time, std::size_t &nsrc);
+
+  // rigid bodies (fix clump/rigid, KIFMMRigidBodies): the pairs inside each body are left out
+  // of the sum (kspace_kifmm_bodies.cpp). Per point: its body's ID (0: free atom), the lab
+  // offset from the body's centre of mass, 1 / pebbles of its body, and the pair sums inside
+  // its body in the lab frame (gradient 3, potential, pair virial 6)
+  std::vector<class KIFMMRigidBodies *> bodies;
+  std::vector<tagint> point_body;
+  std::vector<double> point_arm, point_clump_weight, body_pairs;
+  void find_rigid_bodies();
+  void prepare_rigid_bodies();
+  void subtract_body_pairs(bool potential);
   void report_first_evaluation();
   void report_coincident_pairs(std::size_t local_pairs);
   void check_memory(std::size_t nsources);

@@ -76,6 +76,8 @@ FixClumpRigid::FixClumpRigid(LAMMPS *lmp, int narg, char **arg) : Fix(lmp, narg,
   restart_global = 1;
   restart_peratom = 1;
   wd_section = 1;
+  create_attribute = 1;    // set_arrays() for created atoms: their clump values are not known
+  maxexchange = 4 + NBV;
 
   if (narg < 5)
     error->all(FLERR, "Illegal fix clump/rigid command: expected density <rho> or infile <file>");
@@ -207,6 +209,7 @@ FixClumpRigid::~FixClumpRigid()
     atom->delete_callback(id, Atom::RESTART);
   }
   memory->destroy(rdisp);
+  memory->destroy(bodyval);
   // the computes and the rigid fix are owned by this fix; they may already be gone when
   // LAMMPS is being destroyed or the user deleted them
   if (modify) {
@@ -224,7 +227,10 @@ int FixClumpRigid::setmask()
   // all integration is done by the internal rigid fix; initial_integrate (before the rigid
   // fix's, this fix comes first) only completes the rigid fix's set-up: the gravity force of
   // the clumps, rigid/nve/small's conjqm
-  return (integrator == "rigid/nve/small" || !grav_id.empty()) ? FixConst::INITIAL_INTEGRATE : 0;
+  // setup_post_neighbor puts a restored clump state back before the first forces of a run
+  int mask = FixConst::POST_NEIGHBOR;
+  if (integrator == "rigid/nve/small" || !grav_id.empty()) mask |= FixConst::INITIAL_INTEGRATE;
+  return mask;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -261,6 +267,11 @@ void FixClumpRigid::init()
 {
   Fix *r = rigid_fix();
   int dim;
+  // clump values are computed again in every run (charges or pebbles may have changed), and
+  // the pebble counts checked again
+  counts_checked = false;
+  bodies_layout = nullptr;
+  for (int i = 0; i < atom->nlocal; ++i) bodyval[i][BV_VALID] = 0.0;
   // rigid/small has not set up its bodies yet (it does so once, at the first run's setup,
   // from the infile): give it the clumps as they are now, positions and velocities, or the
   // state stored in the restart file
@@ -639,6 +650,12 @@ void FixClumpRigid::set_molecule(int nlocalprev, tagint tagprev, int imol, doubl
                                  double *vcm, double *quat)
 {
   rigid_fix()->set_molecule(nlocalprev, tagprev, imol, xgeom, vcm, quat);
+  // an inserted clump has the pebbles of its template (values computed when first needed)
+  const int natoms = atom->molecules[imol]->natoms;
+  for (int i = nlocalprev; i < atom->nlocal; ++i) {
+    bodyval[i][BV_COUNT] = natoms;
+    bodyval[i][BV_VALID] = 0.0;
+  }
 }
 
 /* ----------------------------------------------------------------------
@@ -730,12 +747,25 @@ void FixClumpRigid::write_restored_bodies_file()
    setup_pre_neighbor(), which has set the clumps up from the infile
 ------------------------------------------------------------------------- */
 
-void FixClumpRigid::setup(int)
+void FixClumpRigid::setup_post_neighbor()
 {
+  // after rigid/small's set-up from the clump file, before the forces of the run's set-up
+  // (the kspace computes the clump values from the body-frame offsets put back here)
   if (restore_pending) {
     restore_pending = false;
     restore_state();
   }
+}
+
+void FixClumpRigid::setup(int)
+{
+  if (restore_pending) {    // minimization: no setup_post_neighbor call
+    restore_pending = false;
+    restore_state();
+    for (int i = 0; i < atom->nlocal; ++i) bodyval[i][BV_VALID] = 0.0;    // offsets changed
+  }
+  // pebble counts of the clumps (if the kspace has not checked them in this run's set-up)
+  if (!counts_checked) gather_clumps(nullptr, nullptr);
   // rigid/nve/small's setup() (after this one) recomputes conjqm from angmom: keep the
   // integrated (or restored) values and put them back before its first initial_integrate
   gravity_pending = !grav_id.empty();
@@ -963,33 +993,38 @@ void FixClumpRigid::unpack_restart(int nlocal, int nth)
 void FixClumpRigid::grow_arrays(int nmax)
 {
   memory->grow(rdisp, nmax, 4, "clump/rigid:rdisp");
+  memory->grow(bodyval, nmax, NBV, "clump/rigid:bodyval");
 }
 
 void FixClumpRigid::copy_arrays(int i, int j, int)
 {
   for (int k = 0; k < 4; ++k) rdisp[j][k] = rdisp[i][k];
+  for (int k = 0; k < NBV; ++k) bodyval[j][k] = bodyval[i][k];
 }
 
 void FixClumpRigid::set_arrays(int i)
 {
   for (int k = 0; k < 4; ++k) rdisp[i][k] = 0.0;
+  for (int k = 0; k < NBV; ++k) bodyval[i][k] = 0.0;
 }
 
 int FixClumpRigid::pack_exchange(int i, double *buf)
 {
   for (int k = 0; k < 4; ++k) buf[k] = rdisp[i][k];
-  return 4;
+  for (int k = 0; k < NBV; ++k) buf[4 + k] = bodyval[i][k];
+  return 4 + NBV;
 }
 
 int FixClumpRigid::unpack_exchange(int nlocal, double *buf)
 {
   for (int k = 0; k < 4; ++k) rdisp[nlocal][k] = buf[k];
-  return 4;
+  for (int k = 0; k < NBV; ++k) bodyval[nlocal][k] = buf[4 + k];
+  return 4 + NBV;
 }
 
 double FixClumpRigid::memory_usage()
 {
-  return (double) atom->nmax * 4 * sizeof(double);
+  return (double) atom->nmax * (4 + NBV) * sizeof(double);
 }
 
 /* ----------------------------------------------------------------------

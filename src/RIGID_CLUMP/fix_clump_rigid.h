@@ -14,10 +14,15 @@
 //   - restart files: the exact state of every clump (mass properties, position, orientation,
 //     motion) and the body-frame offset of every pebble, put back into rigid/small after its
 //     set-up in the restarted run (a run split by a restart equals the unsplit run);
-//     write_data keeps the pebbles and molecule IDs only (a warning says so).
+//     write_data keeps the pebbles and molecule IDs only (a warning says so);
+//   - the pebble count of every clump, checked at each run (pebbles deleted or added after the
+//     mass properties were computed are an error);
+//   - for kspace_style kifmm (KIFMMRigidBodies, fix_clump_rigid_bodies.cpp): the pair sums
+//     inside each clump in the body frame, so that the kspace leaves them out.
 #pragma once
 
 #include "fix.h"
+#include "kifmm_rigid_bodies.h"
 
 #include <array>
 #include <map>
@@ -26,7 +31,7 @@
 
 namespace LAMMPS_NS {
 
-class FixClumpRigid : public Fix {
+class FixClumpRigid : public Fix, public KIFMMRigidBodies {
  public:
   FixClumpRigid(class LAMMPS *, int, char **);
   ~FixClumpRigid() override;
@@ -36,6 +41,7 @@ class FixClumpRigid : public Fix {
   double compute_vector(int) override;
   void *extract(const char *, int &) override;
   void set_molecule(int, tagint, int, double *, double *, double *) override;
+  void setup_post_neighbor() override;
   void setup(int) override;
   void initial_integrate(int) override;
 
@@ -53,6 +59,14 @@ class FixClumpRigid : public Fix {
   int pack_exchange(int, double *) override;
   int unpack_exchange(int, double *) override;
   double memory_usage() override;
+
+  // ---- KIFMMRigidBodies (fix_clump_rigid_bodies.cpp)
+  const char *bodies_id() const override { return id; }
+  bool bodies_ready(std::string &why) override;
+  void compute_body_values(const Strength &strength, const BodyFunction &f) override;
+  const double *body_values(int i) const override;
+  void body_frame(int i, double rotation[9], double offset[3]) const override;
+  tagint body_tag(int i) const override;
 
   // write_data: a comment in the data file and a warning (no clump state in data files)
   void write_data_section_size(int, int &, int &) override;
@@ -93,6 +107,16 @@ class FixClumpRigid : public Fix {
   // computes: it is added before the first step of each run (as final_integrate would have)
   std::string grav_id;
   bool gravity_pending = false;
+
+  // ---- per pebble: pair sums inside its clump (KIFMMRigidBodies::nvalues), the strength they
+  // were computed with, valid flag, pebble count of its clump when first checked (0: not yet)
+  enum { BV_STRENGTH = value_strength, BV_VALID = value_valid, BV_COUNT = value_count, NBV };
+  double **bodyval = nullptr;
+  bool counts_checked = false;       // pebble counts checked in this run
+  class RigidSmallLayout *bodies_layout = nullptr;    // set by bodies_ready()
+  void gather_clumps(const Strength *strength, const BodyFunction *f);
+  static int clump_callback(int n, char *inbuf, int &flag, int *&proclist, char *&outbuf, void *ptr);
+  const BodyFunction *rendezvous_function = nullptr;
 
   Fix *rigid_fix();
   class RigidSmallLayout *rigid_layout(std::string &why);

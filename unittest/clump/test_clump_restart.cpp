@@ -24,6 +24,7 @@
 #include <gtest/gtest.h>
 #include <mpi.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -167,7 +168,11 @@ bool bitwise_equal(const State &a, const State &b)
   if (a.atoms != b.atoms) return false;
   if (a.clumps.size() != b.clumps.size()) return false;
   for (const auto &[mol, ra] : a.clumps) {
-    if (ra != b.clumps.at(mol)) return false;    // every column of compute rigid/local
+    // every column of compute rigid/local but the first: the body ID is the tag of the pebble
+    // that rigid/small picks as the clump's owner (the one nearest the centre), picked again
+    // from the positions after a restart (the two pebbles of a dimer are a tie)
+    const auto &rb = b.clumps.at(mol);
+    if (!std::equal(ra.begin() + 1, ra.end(), rb.begin() + 1)) return false;
   }
   return true;
 }
@@ -341,8 +346,9 @@ group nothing empty
     EXPECT_NEAR(s[MASS] / r[MASS], 1.0, 1e-6);
     for (int k : {XU, YU, ZU}) EXPECT_NEAR(s[k], r[k], 1e-9);
     for (int k : {VX, VY, VZ}) EXPECT_NEAR(s[k], r[k], 1e-9);
+    // L = I omega with the recomputed inertia: equal to the integration accuracy (tol 1e-5)
     for (int k : {ANGMOMX, ANGMOMY, ANGMOMZ})
-      EXPECT_NEAR(s[k], r[k], 1e-6 * std::fabs(r[k]) + 1e-15);
+      EXPECT_NEAR(s[k], r[k], 1e-5 * std::fabs(r[k]) + 1e-15);
   }
 }
 

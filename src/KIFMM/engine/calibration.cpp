@@ -51,6 +51,11 @@ const Row kTable[] = {
 constexpr int kRows = sizeof kTable / sizeof kTable[0];
 }    // namespace
 
+int max_calibrated_order()
+{
+  return kTable[kRows - 1].order;
+}
+
 int default_leaf_size(int order)
 {
   for (const Row &r : kTable)

@@ -100,6 +100,14 @@ void direct_sum(const KernelSpec &kernel, std::size_t n_src, const double *src_x
                 const double *src_q, std::size_t n_trg, const double *trg_xyz, double *pot,
                 double *grad);
 
+// All pairs inside one small group of n points (e.g. the pebbles of a rigid body), O(n^2),
+// serial, same kernel and conventions as direct_sum (r = 0 pairs excluded): for every point i,
+// pot[i] = sum_j q_j G(x_i, x_j), grad[3i..] its gradient, and (when pair_virial is not null)
+// the pair virial tensor T_i,ab = sum_j q_j (x_i - x_j)_a dG/dx_i,b (6 values per point in the
+// order xx yy zz xy xz yz; symmetric for these radial kernels).
+void group_pair_sum(const KernelSpec &kernel, std::size_t n, const double *xyz, const double *q,
+                    double *pot, double *grad, double *pair_virial);
+
 // Calibration: smallest-cost (order, leaf size) whose measured relative RMS force error
 // is below rel_force_error; also returns the error that was measured for that choice.
 // periodic: errors measured with periodic boundaries (larger at the same order). The leaf
@@ -110,6 +118,9 @@ struct Choice {
   double measured_error;
 };
 Choice choose_order(const KernelSpec &kernel, double rel_force_error, bool periodic = false);
+// Highest order of the calibration table (choose_order returns it when no order meets the
+// request).
+int max_calibrated_order();
 
 // Tree for n points at this order and boundary: the depth of least modelled CPU time for n
 // points spread uniformly over the root cube (cost_model.h: near-field pairs, M2L translations

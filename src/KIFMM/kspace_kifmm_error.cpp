@@ -1,0 +1,269 @@
+// Measured error of kspace_style kifmm: the evaluated forces of a random sample against the
+// exact sum (open: direct sum over all atoms; periodic: Ewald sum), on what the integrator uses:
+// the forces of free atoms, and the net force and torque of each rigid clump (fix clump/rigid;
+// the forces inside a clump cancel there, so they are not what needs to be accurate).
+// Used by `kspace_modify kifmm check` and, at the first evaluation of a run whose order comes
+// from the requested accuracy, to raise the order until the request is met.
+#include "kspace_kifmm.h"
+
+#include "kifmm_rigid_bodies.h"
+#include "periodic.h"
+
+#include "comm.h"
+#include "error.h"
+#include "input.h"
+#include "update.h"
+#include "variable.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <mpi.h>
+#include <random>
+
+using namespace LAMMPS_NS;
+
+namespace {
+const char *error_variable = "kifmm_error";
+
+// uniform in [0, 1) from a body ID and a seed (the same on every rank)
+double body_hash(tagint tag, unsigned long long seed)
+{
+  unsigned long long z = (unsigned long long) tag * 0x9E3779B97F4A7C15ULL + seed;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  z ^= z >> 31;
+  return (double) (z >> 11) * 0x1.0p-53;
+}
+
+double relative(double diff2, double ref2)
+{
+  return ref2 > 0 ? std::sqrt(diff2 / ref2) : (diff2 > 0 ? INFINITY : 0.0);
+}
+}    // namespace
+
+double KSpaceKIFMM::MeasuredError::worst() const
+{
+  return std::max(atoms, std::max(clump_force, clump_torque));
+}
+
+KSpaceKIFMM::MeasuredError KSpaceKIFMM::measure_error(int nsamples)
+{
+  const std::size_t n = index.size();
+  const bool with_bodies = !point_body.empty();
+  auto is_free = [&](std::size_t k) { return !with_bodies || point_body[k] == 0; };
+
+  // how many free atoms and clumps there are (clumps: each pebble counts 1 / its clump's size)
+  double mine[2] = {0, 0}, all[2];
+  for (std::size_t k = 0; k < n; ++k) {
+    if (is_free(k))
+      mine[0] += 1;
+    else
+      mine[1] += point_clump_weight[k];
+  }
+  MPI_Allreduce(mine, all, 2, MPI_DOUBLE, MPI_SUM, world);
+
+  // the sample: free atoms at random (with replacement), clumps by a hash of their ID (all
+  // their pebbles)
+  const unsigned long long seed = 1234567ULL + 7919ULL * (unsigned long long) update->ntimestep;
+  std::vector<std::size_t> sample;
+  if (all[0] > 0 && mine[0] > 0) {
+    std::vector<std::size_t> free_points;
+    for (std::size_t k = 0; k < n; ++k)
+      if (is_free(k)) free_points.push_back(k);
+    std::size_t want = (std::size_t) std::ceil((double) nsamples * mine[0] / all[0]);
+    if (want >= free_points.size())
+      sample = free_points;
+    else {
+      std::mt19937_64 rng(seed + 104729ULL * (unsigned long long) comm->me);
+      std::uniform_int_distribution<std::size_t> pick(0, free_points.size() - 1);
+      for (std::size_t k = 0; k < want; ++k) sample.push_back(free_points[pick(rng)]);
+    }
+  }
+  const double p_clump = all[1] > 0 ? std::min(1.0, nsamples / all[1]) : 0.0;
+  for (std::size_t k = 0; k < n; ++k)
+    if (!is_free(k) && body_hash(point_body[k], seed) < p_clump) sample.push_back(k);
+
+  // exact gradients at the sample
+  std::vector<double> txyz(3 * sample.size()), exact(3 * sample.size(), 0.0);
+  for (std::size_t k = 0; k < sample.size(); ++k)
+    for (int d = 0; d < 3; ++d) txyz[3 * k + d] = xyz[3 * sample[k] + d];
+  auto exact_sum = [&](std::size_t nt, const double *t, double *g) {
+    if (nt == 0 || strength.empty()) return;
+    if (periodic)    // Ewald reference (engine/periodic.h)
+      kifmm::periodic_direct_sum(engine->kernel(), engine->options().root_center,
+                                 engine->options().root_half_width, strength.size(), xyz.data(),
+                                 strength.data(), nt, t, nullptr, g);
+    else
+      kifmm::direct_sum(engine->kernel(), strength.size(), xyz.data(), strength.data(), nt, t,
+                        nullptr, g);
+  };
+  if (distributed()) {
+    // the samples of all ranks on every rank (small); each rank sums its own atoms on them
+    // (both references are linear in the sources)
+    int nmine = (int) sample.size(), nprocs = comm->nprocs;
+    std::vector<int> counts(nprocs), displs(nprocs);
+    MPI_Allgather(&nmine, 1, MPI_INT, counts.data(), 1, MPI_INT, world);
+    int total = 0, offset = 0;
+    for (int p = 0; p < nprocs; ++p) {
+      displs[p] = 3 * total;
+      if (p == comm->me) offset = total;
+      total += counts[p];
+      counts[p] *= 3;
+    }
+    std::vector<double> all_t(3 * (std::size_t) total), all_g(3 * (std::size_t) total, 0.0);
+    MPI_Allgatherv(txyz.data(), 3 * nmine, MPI_DOUBLE, all_t.data(), counts.data(), displs.data(),
+                   MPI_DOUBLE, world);
+    exact_sum((std::size_t) total, all_t.data(), all_g.data());
+    if (total > 0) MPI_Allreduce(MPI_IN_PLACE, all_g.data(), 3 * total, MPI_DOUBLE, MPI_SUM, world);
+    std::copy(all_g.begin() + 3 * (std::size_t) offset,
+              all_g.begin() + 3 * ((std::size_t) offset + sample.size()), exact.begin());
+  } else {
+    exact_sum(sample.size(), txyz.data(), exact.data());
+  }
+
+  // free atoms: their forces; clumps: net force and torque, summed over ranks per clump
+  double sums[2] = {0, 0};
+  std::map<tagint, std::array<double, 12>> clump;    // dF, F, dtau, tau
+  for (std::size_t k = 0; k < sample.size(); ++k) {
+    const std::size_t j = sample[k];
+    const double s = strength[j];
+    double e[3], a[3];
+    for (int d = 0; d < 3; ++d) {
+      // the evaluated gradient has the pairs inside the clump subtracted: so has the reference
+      e[d] = s * (exact[3 * k + d] - (is_free(j) ? 0.0 : body_pairs[(std::size_t) KIFMMRigidBodies::nvalues * j + d]));
+      a[d] = s * grad[3 * j + d];
+    }
+    if (is_free(j)) {
+      for (int d = 0; d < 3; ++d) {
+        sums[0] += (a[d] - e[d]) * (a[d] - e[d]);
+        sums[1] += e[d] * e[d];
+      }
+      continue;
+    }
+    auto &c = clump.try_emplace(point_body[j]).first->second;
+    const double *r = &point_arm[3 * j];
+    const double df[3] = {a[0] - e[0], a[1] - e[1], a[2] - e[2]};
+    for (int d = 0; d < 3; ++d) {
+      c[d] += df[d];
+      c[3 + d] += e[d];
+    }
+    const double dt[3] = {r[1] * df[2] - r[2] * df[1], r[2] * df[0] - r[0] * df[2], r[0] * df[1] - r[1] * df[0]};
+    const double t[3] = {r[1] * e[2] - r[2] * e[1], r[2] * e[0] - r[0] * e[2], r[0] * e[1] - r[1] * e[0]};
+    for (int d = 0; d < 3; ++d) {
+      c[6 + d] += dt[d];
+      c[9 + d] += t[d];
+    }
+  }
+  std::vector<double> rec;
+  for (const auto &[tag, c] : clump) {
+    rec.push_back((double) tag);
+    rec.insert(rec.end(), c.begin(), c.end());
+  }
+  int nrec = (int) rec.size(), nprocs = comm->nprocs;
+  std::vector<int> counts(nprocs), displs(nprocs);
+  MPI_Allgather(&nrec, 1, MPI_INT, counts.data(), 1, MPI_INT, world);
+  int total = 0;
+  for (int p = 0; p < nprocs; ++p) {
+    displs[p] = total;
+    total += counts[p];
+  }
+  std::vector<double> all_rec(std::max(total, 1));
+  MPI_Allgatherv(rec.data(), nrec, MPI_DOUBLE, all_rec.data(), counts.data(), displs.data(),
+                 MPI_DOUBLE, world);
+  std::map<tagint, std::array<double, 12>> whole;
+  for (int k = 0; k + 13 <= total; k += 13) {
+    auto &c = whole.try_emplace((tagint) all_rec[k]).first->second;
+    for (int m = 0; m < 12; ++m) c[m] += all_rec[k + 1 + m];
+  }
+  double csum[4] = {0, 0, 0, 0};
+  for (const auto &[tag, c] : whole)
+    for (int d = 0; d < 3; ++d) {
+      csum[0] += c[d] * c[d];
+      csum[1] += c[3 + d] * c[3 + d];
+      csum[2] += c[6 + d] * c[6 + d];
+      csum[3] += c[9 + d] * c[9 + d];
+    }
+
+  double tot[2];
+  bigint nfree = (bigint) (sample.size()), nfree_all = 0;
+  for (std::size_t j : sample)
+    if (!is_free(j)) --nfree;
+  MPI_Allreduce(sums, tot, 2, MPI_DOUBLE, MPI_SUM, world);
+  MPI_Allreduce(&nfree, &nfree_all, 1, MPI_LMP_BIGINT, MPI_SUM, world);
+  MeasuredError m;
+  m.natoms = nfree_all;
+  m.nclumps = (bigint) whole.size();
+  if (nfree_all > 0) m.atoms = relative(tot[0], tot[1]);
+  if (m.nclumps > 0) {
+    m.clump_force = relative(csum[0], csum[1]);
+    // clumps of one point (or all pebbles at the centre of mass) have no torque
+    if (csum[3] > 0 || csum[2] > 0) m.clump_torque = relative(csum[2], csum[3]);
+  }
+  return m;
+}
+
+std::string KSpaceKIFMM::MeasuredError::describe() const
+{
+  std::string s;
+  if (natoms > 0) s += fmt::format("forces of {} atoms {:.3e}", natoms, atoms);
+  if (nclumps > 0) {
+    if (!s.empty()) s += "; ";
+    s += fmt::format("net forces of {} clumps {:.3e}", nclumps, clump_force);
+    if (clump_torque >= 0) s += fmt::format(", torques {:.3e}", clump_torque);
+  }
+  return s.empty() ? "no atoms" : s;
+}
+
+void KSpaceKIFMM::check_error()
+{
+  const MeasuredError m = measure_error(kset.check_samples);
+  last_measured_error = std::max(0.0, m.worst());
+  int ivar = input->variable->find(error_variable);
+  if (ivar >= 0) input->variable->internal_set(ivar, last_measured_error);
+  if (comm->me == 0)
+    utils::logmesg(lmp, "KIFMM check at step {}: measured relative force error {:.3e} ({})\n",
+                   update->ntimestep, last_measured_error, m.describe());
+}
+
+// First evaluation of a run whose order comes from the requested accuracy: the error measured
+// on these atoms (free atoms' forces, clumps' net forces and torques); while it exceeds the
+// request, the next order is evaluated. Above the calibrated orders a warning gives the error
+// that can be reached.
+void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::size_t &nsrc)
+{
+  verify_pending = false;
+  bigint ntotal = 0, nmine = (bigint) index.size();
+  MPI_Allreduce(&nmine, &ntotal, 1, MPI_LMP_BIGINT, MPI_SUM, world);
+  if (ntotal < 2) return;
+  const int nsamples = kset.check_samples > 0 ? kset.check_samples : verify_samples;
+  MeasuredError m = measure_error(nsamples);
+  while (m.worst() > kset.accuracy && engine_options.order < kifmm::max_calibrated_order()) {
+    const int from = engine_options.order;
+    const double was = m.worst();
+    kifmm::Options opt = engine->options();
+    opt.order = from + 1;
+    engine = kifmm::make_evaluator(engine->kernel(), opt);
+    engine_options = engine->options();
+    reported_first_evaluation = false;
+    evaluate_points(want_potential, comm_time, nsrc);
+    m = measure_error(nsamples);
+    if (comm->me == 0)
+      utils::logmesg(lmp,
+                     "  KIFMM order {} measured {:.3e} > requested {:.3g} on these atoms: order {} "
+                     "measured {:.3e} ({})\n",
+                     from, was, kset.accuracy, engine_options.order, m.worst(), m.describe());
+  }
+  verified_error = m.worst();
+  if (comm->me == 0) {
+    if (m.worst() > kset.accuracy)
+      error->warning(FLERR,
+                     "kspace_style kifmm: the requested accuracy {:.3g} is out of reach for these "
+                     "atoms: measured {:.3e} at order {}, the highest calibrated order ({})",
+                     kset.accuracy, m.worst(), engine_options.order, m.describe());
+    else
+      utils::logmesg(lmp, "  KIFMM order {}: measured relative error {:.3e} ({}), requested {:.3g}\n",
+                     engine_options.order, m.worst(), m.describe(), kset.accuracy);
+  }
+}

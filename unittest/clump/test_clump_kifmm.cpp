@@ -1,0 +1,289 @@
+// kspace_style kifmm with the rigid clumps of fix clump/rigid: the pairs inside a clump are left
+// out of the long-range sum (forces, energy, virial, per-atom values equal LAMMPS's own pair
+// coul/cut over the same clumps, whose intra-clump pairs fix clump/rigid excludes), also with
+// periodic boundaries; a spinning clump keeps its rotational energy under fix kifmm/stride; a
+// gas of dipole clumps drifts under a stride about as much as without; the requested accuracy
+// holds for the clumps' net forces and torques, also with an explicit leaf size; a clump that
+// lost pebbles is an error; an unreachable accuracy is a warning.
+#include "clump_test_util.h"
+#include "lammps_fixture.h"
+
+#include "atom.h"
+#include "lammps.h"
+#include "library.h"
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <sstream>
+
+using namespace kifmm_test;
+using clump_test::clump_rows;
+
+namespace {
+
+// n dipole clumps (potentials/dipole3.mol: pebbles -1, 0, +1 at spacing 0.01, radius 0.005) on
+// a jittered cubic lattice of spacing a, random orientations, in lj units (qqrd2e = 1)
+// (margin: free space around the lattice in the box)
+std::string dipole_gas(int n, double a, const std::string &boundary = "f f f", double margin = 0.0,
+                       unsigned seed = 7)
+{
+  const int side = (int) std::ceil(std::cbrt((double) n));
+  const double box = side * a + margin;
+  std::ostringstream s;
+  s.precision(17);
+  // shrink-wrapped boundaries are set after the clumps are made (create_atoms shrinks the box)
+  const bool shrink = boundary.find('s') != std::string::npos;
+  s << "units lj\natom_style hybrid sphere charge\natom_modify map array\nboundary "
+    << (shrink ? "f f f" : boundary) << "\nregion box block " << -margin << ' ' << box << ' ' << -margin << ' ' << box << ' '
+    << -margin << ' ' << box
+    << "\ncreate_box 2 box\nfix mol all property/atom mol ghost yes\nmolecule dip "
+    << clump_test::potentials << "/dipole3.mol\n";
+  std::mt19937_64 g(seed);
+  std::uniform_real_distribution<double> jitter(-0.2 * a, 0.2 * a), angle(0.0, 360.0),
+      axis(-1.0, 1.0);
+  int made = 0;
+  for (int i = 0; i < side && made < n; ++i)
+    for (int j = 0; j < side && made < n; ++j)
+      for (int k = 0; k < side && made < n; ++k, ++made) {
+        double ax[3] = {axis(g), axis(g), axis(g)};
+        s << "create_atoms 0 single " << (i + 0.5) * a + jitter(g) << ' ' << (j + 0.5) * a + jitter(g)
+          << ' ' << (k + 0.5) * a + jitter(g) << " mol dip " << 1000 + made << " rotate "
+          << angle(g) << ' ' << ax[0] << ' ' << ax[1] << ' ' << ax[2] + 1e-3 << " units box\n";
+      }
+  if (shrink) s << "change_box all boundary " << boundary << "\n";
+  s << "comm_modify vel yes cutoff 0.05\nneighbor 0.01 bin\nneigh_modify one 10000 page 200000\n"
+       "compute pv all pressure NULL pair kspace\n"
+       "thermo_style custom step pe elong c_pv\n"
+       "thermo_modify norm no\n";
+  return s.str();
+}
+
+double rel_rms(const std::map<int, std::vector<double>> &a, const std::map<int, std::vector<double>> &b,
+               int c0)
+{
+  double num = 0, den = 0;
+  for (const auto &[mol, rb] : b) {
+    const auto &ra = a.at(mol);
+    for (int d = 0; d < 3; ++d) {
+      num += (ra[c0 + d] - rb[c0 + d]) * (ra[c0 + d] - rb[c0 + d]);
+      den += rb[c0 + d] * rb[c0 + d];
+    }
+  }
+  return std::sqrt(num / den);
+}
+
+class ClumpKifmm : public LammpsFixture {
+ protected:
+  // per atom: forces, energy, virial (xx yy zz xy xz yz) of compute pe/atom and stress/atom
+  struct Run {
+    std::map<int, Vec3> f;
+    std::map<int, std::array<double, 7>> peratom;    // pe, stress * volume (6)
+    double energy = 0;
+    std::array<double, 6> p{};
+  };
+  Run run0(const std::string &forces)
+  {
+    commands(forces + "\nthermo_style custom step pe c_pv[1] c_pv[2] c_pv[3] c_pv[4] c_pv[5] c_pv[6]\n"
+             "run 0 post no");
+    Run r;
+    r.f = forces_by_id();
+    r.energy = thermo("pe");
+    for (int k = 0; k < 6; ++k) r.p[k] = evaluate("c_pv[" + std::to_string(k + 1) + "]");
+    auto *a = lmp->atom;
+    auto *pe = static_cast<double *>(lammps_extract_compute(lmp, "pea", LMP_STYLE_ATOM, LMP_TYPE_VECTOR));
+    auto **st = static_cast<double **>(lammps_extract_compute(lmp, "sta", LMP_STYLE_ATOM, LMP_TYPE_ARRAY));
+    for (int i = 0; i < a->nlocal; ++i) {
+      std::array<double, 7> v{};
+      v[0] = pe[i];
+      for (int k = 0; k < 6; ++k) v[1 + k] = st[i][k];
+      r.peratom[(int) a->tag[i]] = v;
+    }
+    return r;
+  }
+  std::string clump_fix = "fix c all clump/rigid density 2500";
+};
+
+}    // namespace
+
+// The sum kspace kifmm computes for clumps is that of LAMMPS's pair coul/cut (cutoff beyond the
+// box) over the same clumps: fix clump/rigid excludes intra-clump pairs from the pair style, so
+// both leave them out. Forces, energy, pressure tensor, per-atom energy and virial.
+TEST_F(ClumpKifmm, IntraClumpPairsAreLeftOutAsForPairStyles)
+{
+  const std::string computes =
+      "compute pea all pe/atom\ncompute sta all stress/atom NULL pair kspace\n";
+  commands(dipole_gas(40, 0.06) + clump_fix + "\n" + computes);
+  Run exact = run0("pair_style coul/cut 10.0\npair_coeff * *\nkspace_style none");
+  create();
+  commands(dipole_gas(40, 0.06) + clump_fix + "\n" + computes);
+  Run fmm = run0("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-9");
+  // the intra-clump energy (-50 per clump: pairs -1/+1 at 0.02 and +-1/0) is not in the sum
+  EXPECT_NEAR(fmm.energy, exact.energy, 1e-7 * std::fabs(exact.energy) + 1e-9);
+  EXPECT_LT(std::fabs(exact.energy), 100.0) << "inter-clump energy only (the intra-clump pairs: -2000)";
+  EXPECT_LT(relative_force_error(fmm.f, exact.f), 1e-7);
+  double pscale = 0;
+  for (double v : exact.p) pscale = std::max(pscale, std::fabs(v));
+  for (int k = 0; k < 6; ++k) EXPECT_NEAR(fmm.p[k], exact.p[k], 1e-7 * pscale) << "component " << k;
+  double num = 0, den = 0;
+  for (const auto &[id, v] : exact.peratom)
+    for (int k = 0; k < 7; ++k) {
+      num += (fmm.peratom.at(id)[k] - v[k]) * (fmm.peratom.at(id)[k] - v[k]);
+      den += v[k] * v[k];
+    }
+  EXPECT_LT(std::sqrt(num / den), 1e-7) << "per-atom energy and virial";
+}
+
+// Periodic boundaries: the clumps' sum is the sum of the same atoms without clumps minus each
+// intra-clump pair at its own (nearest-image) distance; energy, forces and scalar pressure.
+TEST_F(ClumpKifmm, PeriodicSumLeavesOutTheNearestImageOfIntraClumpPairs)
+{
+  const std::string kspace = "pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-10\n";
+  commands(dipole_gas(27, 0.05, "p p p") + kspace + "run 0 post no");
+  const auto free_f = forces_by_id();
+  const double free_e = thermo("elong"), free_p = evaluate("c_pv");
+  const auto x = positions_by_id();
+  const double volume = evaluate("vol");
+  create();
+  commands(dipole_gas(27, 0.05, "p p p") + clump_fix + "\n" + kspace + "run 0 post no");
+  const auto f = forces_by_id();
+  // pairs inside a clump: 3 consecutive atom IDs (1..3, 4..6, ...), charges -1 0 +1
+  std::map<int, Vec3> expect = free_f;
+  double e_intra = 0;
+  const double q[3] = {-1, 0, 1};
+  for (int c = 0; c < 27; ++c)
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) {
+        if (a == b) continue;
+        const int i = 3 * c + a + 1, j = 3 * c + b + 1;
+        Vec3 r;
+        double r2 = 0;
+        for (int d = 0; d < 3; ++d) {
+          r[d] = x.at(i)[d] - x.at(j)[d];
+          r2 += r[d] * r[d];
+        }
+        const double rr = std::sqrt(r2);
+        for (int d = 0; d < 3; ++d) expect[i][d] -= q[a] * q[b] * r[d] / (r2 * rr);
+        e_intra += 0.5 * q[a] * q[b] / rr;
+      }
+  EXPECT_LT(relative_force_error(f, expect), 1e-8);
+  EXPECT_NEAR(thermo("elong"), free_e - e_intra, 1e-8 * std::fabs(e_intra));
+  // coulomb: trace of the virial = energy, P = U / (3 V) (virial part of the pressure)
+  EXPECT_NEAR(evaluate("c_pv"), free_p - e_intra / (3 * volume), 1e-8 * std::fabs(e_intra / volume));
+}
+
+// One freely spinning dipole clump (no other atom): no long-range force acts on it, so its
+// rotational energy stays constant under any stride and mode (held pebble forces used to carry
+// the intra-clump forces, which turned into a torque as the clump rotated).
+TEST_F(ClumpKifmm, SpinningClumpKeepsItsRotationalEnergyUnderAnyStride)
+{
+  for (const char *stride : {"", "1", "5", "10", "5 mode impulse", "10 mode impulse"}) {
+    create();
+    commands("units si\natom_style hybrid sphere charge\natom_modify map array\nboundary f f f\n"
+             "region box block -1 1 -1 1 -1 1 units box\ncreate_box 2 box\n"
+             "fix mol all property/atom mol ghost yes\nmolecule dip " + clump_test::potentials +
+             "/dipole3.mol\ncreate_atoms 0 single 0 0 0 mol dip 1 rotate 30 0 0 1\n"
+             "set type 2 charge 1e-3\nset atom 1 charge -1e-3\n"
+             "pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-5\n"
+             "fix c all clump/rigid density 2500 integrator nve\n"
+             "variable vx atom -100*y\nvariable vy atom 100*x\nvelocity all set v_vx v_vy 0\n"
+             "timestep 1e-4\nthermo_style custom step f_c[3]\n");
+    if (*stride) command(std::string("fix st all kifmm/stride ") + stride);
+    command("run 0 post no");
+    const double e0 = evaluate("f_c[3]");
+    command("run 1000 post no");
+    const double e1 = evaluate("f_c[3]");
+    SCOPED_TRACE(testing::Message() << "stride '" << stride << "'");
+    EXPECT_GT(e0, 1e-3);
+    EXPECT_NEAR(e1 / e0, 1.0, 1e-6);
+    // the clump's net force is zero to round-off of the intra-clump forces (2.2e7 N here)
+    auto rows = clump_rows(lmp, "c");
+    ASSERT_EQ(rows.size(), 1u);
+    for (int d = 0; d < 3; ++d) EXPECT_LT(std::fabs(rows.begin()->second[clump_test::FX + d]), 1e-6);
+  }
+}
+
+// 200 free dipole clumps (translation, rotation, dipole-dipole forces between clumps): the
+// energy drift with a stride (hold and impulse) against the drift of the run without.
+TEST_F(ClumpKifmm, DipoleGasEnergyDriftUnderAStrideIsCloseToTheRunWithout)
+{
+  auto drift = [&](const std::string &stride) {
+    create();
+    commands(dipole_gas(200, 1.0, "f f f", 2.0) + clump_fix + " integrator nve\n" +
+             "pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-6\n"
+             "velocity all create 1e-6 4928 loop geom\ntimestep 1e-4\n"
+             "variable etot equal f_c[4]+elong\nthermo_style custom step f_c[4] elong v_etot\n"
+             "thermo_modify norm no\n");
+    if (!stride.empty()) command("fix st all kifmm/stride " + stride + " energy every");
+    command("run 0 post no");
+    const double e0 = evaluate("v_etot"), ke0 = evaluate("f_c[4]");
+    double worst = 0;
+    for (int k = 0; k < 20; ++k) {
+      command("run 50 post no");
+      worst = std::max(worst, std::fabs(evaluate("v_etot") - e0));
+    }
+    std::printf("  stride '%s': E0 %.6g KE0 %.6g, largest |E - E0| %.3e (%.3e of KE0)\n",
+                stride.c_str(), e0, ke0, worst, worst / ke0);
+    EXPECT_GT(ke0, 0.1);
+    return worst / ke0;
+  };
+  const double exact = drift(""), hold = drift("5"), impulse = drift("5 mode impulse");
+  // impulse (kicks of N times the force, time-reversible) stays within 10x the run without;
+  // hold applies forces of up to N-1 steps ago to clumps that turn meanwhile (first order in
+  // the stride: here 0.07 rad of rotation per stride), a drift of a few 1e-3 of the kinetic
+  // energy over the run. Held intra-clump forces (the pebble forces without the exclusion)
+  // changed the energy by orders of magnitude more than it holds.
+  EXPECT_LT(exact, 1e-4);
+  EXPECT_LT(impulse, 10 * exact + 1e-4);
+  EXPECT_LT(hold, 1e-2);
+}
+
+// The accuracy request holds for what the integrator uses: the net force and torque of each
+// clump (relative RMS over clumps), also with a forced deep tree (leaf 16), where intra-clump
+// pairs reach the far field; reference: pair coul/cut over the same clumps.
+TEST_F(ClumpKifmm, RequestedAccuracyHoldsForClumpForcesAndTorques)
+{
+  commands(dipole_gas(200, 0.03, "f f f", 0.02) + clump_fix + "\npair_style coul/cut 10.0\npair_coeff * *\n"
+           "run 0 post no");
+  const auto exact = clump_rows(lmp, "c");
+  for (const char *leaf : {"", "leaf 16"})
+    for (const char *acc : {"1e-3", "1e-5", "1e-7"}) {
+      create();
+      commands(dipole_gas(200, 0.03, "f f f", 0.02) + clump_fix + "\npair_style zero 0.1\npair_coeff * *\n" +
+               "kspace_style kifmm " + acc + "\n");
+      if (*leaf) command(std::string("kspace_modify kifmm ") + leaf);
+      const std::string log = captured("run 0 post no");
+      const auto rows = clump_rows(lmp, "c");
+      const double ef = rel_rms(rows, exact, clump_test::FX),
+                   et = rel_rms(rows, exact, clump_test::TQX);
+      std::printf("  %s %s: net force error %.3e, torque error %.3e\n", acc, leaf, ef, et);
+      SCOPED_TRACE(testing::Message() << acc << " " << leaf << "\n" << log);
+      EXPECT_LE(ef, std::atof(acc));
+      EXPECT_LE(et, std::atof(acc));
+      EXPECT_NE(log.find("measured relative error"), std::string::npos);
+    }
+}
+
+// Pebbles deleted from a clump after its mass properties were computed: an error naming the
+// clump (the mass and inertia would be those of the whole clump).
+TEST_F(ClumpKifmm, DeletedPebblesOfAClumpAreAnError)
+{
+  commands(dipole_gas(8, 0.05) + clump_fix + "\npair_style zero 0.1\npair_coeff * *\nrun 0 post no\n"
+           "group half id 4 5\ndelete_atoms group half");
+  EXPECT_LAMMPS_ERROR(command("run 0 post no"),
+                      "Fix clump/rigid c: clump 2 has 1 pebbles, its mass properties were "
+                      "computed for 3");
+}
+
+// An accuracy below what double precision reaches: a warning with the error that is reached.
+TEST_F(ClumpKifmm, UnreachableAccuracyIsAWarning)
+{
+  commands(dipole_gas(200, 0.03, "f f f", 0.02) + clump_fix + "\npair_style zero 0.1\npair_coeff * *\n"
+           "kspace_style kifmm 1e-14\nkspace_modify kifmm leaf 8\n");
+  const std::string log = captured("run 0 post no");
+  EXPECT_NE(log.find("WARNING: kspace_style kifmm: the requested accuracy 1e-14 is below what the "
+                     "highest calibrated order"),
+            std::string::npos)
+      << log;
+  EXPECT_NE(log.find("is out of reach for these atoms: measured"), std::string::npos) << log;
+}

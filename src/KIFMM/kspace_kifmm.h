@@ -80,7 +80,8 @@ class KSpaceKIFMM : public KSpace {
   void check_error();
   // order from the accuracy: at the first evaluation of a run the error is measured on the
   // atoms and the order raised until the request is met
-  static constexpr int verify_samples = 400;
+  static constexpr int verify_samples = 1000;
+  static constexpr double verify_margin = 0.75;    // sampled error wanted: 3/4 of the request
   bool verify_pending = false;
   double verified_error = -1.0;
   void verify_accuracy(bool want_potential, double &comm_time, std::size_t &nsrc);

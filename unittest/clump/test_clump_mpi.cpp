@@ -111,3 +111,54 @@ TEST(ClumpMpi, ParallelEqualsSerial)
   delete ser;
   delete par;
 }
+
+// kspace kifmm (with fix kifmm/stride) on clumps: the pairs inside each clump are left out on
+// every rank (the clumps' pebbles are gathered by clump ID across ranks, clumps straddle the
+// processor boundary); open and periodic boundaries, parallel equals serial.
+class ClumpMpiKifmm : public ::testing::TestWithParam<const char *> {};
+
+TEST_P(ClumpMpiKifmm, ParallelEqualsSerial)
+{
+  const std::string dimer_file = write_molecule("dimer", dimer());
+  const std::string asym_file = write_molecule("asym", asymmetric());
+  std::string script = system_script(dimer_file, asym_file);
+  auto replace = [&](const std::string &from, const std::string &to) {
+    const auto at = script.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    script.replace(at, from.size(), to);
+  };
+  replace("boundary p p f", std::string("boundary ") + GetParam());
+  // periodic kifmm needs a cubic box
+  replace("region box block -0.2 0.2 -0.05 0.05 -0.05 0.05", "region box block -0.2 0.2 -0.2 0.2 -0.2 0.2");
+  replace("fix wall all wall/gran hooke 200.0 NULL 30.0 NULL 0.5 1 zplane -0.05 NULL\n", "");
+  script += "set type 1 charge 0.25\ndielectric 1.0e14\nkspace_style kifmm 1e-8\n"
+            "fix st all kifmm/stride 5\nthermo_style custom step elong\nthermo_modify norm no\n";
+
+  LAMMPS *par = make_lammps(MPI_COMM_WORLD);
+  LAMMPS *ser = make_lammps(MPI_COMM_SELF);
+  run_script(par, script);
+  run_script(ser, script);
+  for (int chunk = 0; chunk < 3; ++chunk) {
+    run_script(par, chunk == 0 ? "run 0 post no" : "run 200 post no");
+    run_script(ser, chunk == 0 ? "run 0 post no" : "run 200 post no");
+    auto rp = clump_rows(par, "c"), rs = clump_rows(ser, "c");
+    ASSERT_EQ(rs.size(), 8u);
+    ASSERT_EQ(rp.size(), rs.size());
+    double fscale = 0;
+    for (auto &[mol, s] : rs)
+      for (int k : {FX, FY, FZ}) fscale = std::max(fscale, std::fabs(s[k]));
+    ASSERT_GT(fscale, 0.0);
+    for (auto &[mol, s] : rs) {
+      const auto &p = rp.at(mol);
+      SCOPED_TRACE(testing::Message() << GetParam() << " clump " << mol << " chunk " << chunk);
+      for (int k : {XU, YU, ZU}) EXPECT_NEAR(p[k], s[k], 1e-10);
+      for (int k : {VX, VY, VZ}) EXPECT_NEAR(p[k], s[k], 1e-8);
+      for (int k : {FX, FY, FZ, TQX, TQY, TQZ}) EXPECT_NEAR(p[k], s[k], 1e-8 * fscale);
+    }
+  }
+  delete ser;
+  delete par;
+}
+
+INSTANTIATE_TEST_SUITE_P(Boundaries, ClumpMpiKifmm, ::testing::Values("f f f", "p p p"),
+                         [](const auto &info) { return std::string(info.param[0] == 'f' ? "open" : "periodic"); });

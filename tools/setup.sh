@@ -8,6 +8,7 @@ packages=(
   lammps liblammps-dev python3-lammps
   libopenmpi-dev openmpi-bin
   libfftw3-dev libeigen3-dev libfmt-dev libgtest-dev
+  googletest libyaml-dev libpng-dev libjpeg-dev zlib1g-dev
   python3 python3-matplotlib python3-numpy
   clang libclang-rt-dev
 )

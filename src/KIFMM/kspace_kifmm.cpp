@@ -113,6 +113,10 @@ double KSpaceKIFMM::energy_prefactor() const
 
 void KSpaceKIFMM::init()
 {
+  if (domain->dimension == 2)
+    error->all(FLERR,
+               "kspace_style kifmm does not support dimension 2: its kernels (coulomb, gravity, "
+               "yukawa) are the 3-d ones");
   if (domain->triclinic)
     error->all(FLERR, "kspace_style kifmm does not support triclinic boxes");
   if (kset.kernel == LongRangeKernel::Gravity) {

@@ -770,6 +770,35 @@ TEST_F(FixClumpRigidTest, TemplateWithOverflowingCoordinatesIsAnError)
                       "1e\\+09 largest radii from pebble 1");
 }
 
+TEST_F(FixClumpRigidTest, AnotherRigidFixOnTheSameAtomsIsAnError)
+{
+  commands(box_commands());
+  commands("molecule dim " + dimer_file + R"(
+create_atoms 0 single -0.05 0 0 mol dim 12
+create_atoms 0 single 0.05 0 0 mol dim 13
+group first molecule 1
+group second molecule 2
+pair_style zero 0.02
+pair_coeff * *
+timestep 1e-5
+)");
+  // other atoms: both fixes run
+  commands("fix c first clump/rigid density 2500\nfix r second rigid/small molecule\nrun 2");
+  EXPECT_EQ(evaluate("f_c[1]"), 1.0);
+  commands("unfix r");
+  // LAMMPS would stop later with "Lost atoms" or a missing body atom
+  command("fix r all rigid/nve/small molecule");
+  EXPECT_LAMMPS_ERROR(command("run 2"),
+                      "ERROR: Fix clump/rigid c and fix r \\(rigid/nve/small\\) act on the same "
+                      "atoms \\(groups first and all\\)");
+  commands("unfix r\nfix r first rigid single");
+  EXPECT_LAMMPS_ERROR(command("run 2"), "Fix clump/rigid c and fix r \\(rigid\\) act on the same");
+  // another clump fix (through its internal rigid fix c2_rigid) is named as itself
+  commands("unfix r\nfix c2 all clump/rigid density 2500");
+  EXPECT_LAMMPS_ERROR(command("run 2"),
+                      "Fix clump/rigid c and fix c2 \\(clump/rigid\\) act on the same atoms");
+}
+
 TEST_F(FixClumpRigidTest, BadArgumentsAreErrors)
 {
   commands(box_commands());

@@ -9,10 +9,13 @@
 #include "comm.h"
 #include "domain.h"
 #include "error.h"
+#include "fix.h"
 #include "force.h"
+#include "group.h"
 #include "input.h"
 #include "memory.h"
 #include "modify.h"
+#include "neighbor.h"
 #include "pair.h"
 #include "update.h"
 #include "utils.h"
@@ -34,6 +37,29 @@ std::string default_cache_dir()
   if (const char *xdg = std::getenv("XDG_CACHE_HOME")) return std::string(xdg) + "/lammps-kifmm";
   if (const char *home = std::getenv("HOME")) return std::string(home) + "/.cache/lammps-kifmm";
   return "";
+}
+// The neigh_modify exclusions that the long-range sum does not apply, as "type 1 2, group a b,
+// ...": all of them but molecule/intra on the group of a fix whose rigid bodies the kspace
+// leaves out (fix clump/rigid: the pairs inside one clump).
+std::string unapplied_exclusions(LAMMPS *lmp)
+{
+  const Neighbor *nb = lmp->neighbor;
+  std::string list;
+  auto add = [&](const std::string &item) { list += (list.empty() ? "" : ", ") + item; };
+  for (int k = 0; k < nb->nex_type; ++k) add(fmt::format("type {} {}", nb->ex1_type[k], nb->ex2_type[k]));
+  for (int k = 0; k < nb->nex_group; ++k)
+    add(fmt::format("group {} {}", lmp->group->names[nb->ex1_group[k]], lmp->group->names[nb->ex2_group[k]]));
+  for (int k = 0; k < nb->nex_mol; ++k) {
+    bool bodies = false;
+    for (int i = 0; i < lmp->modify->nfix && nb->ex_mol_intra[k]; ++i)
+      if (dynamic_cast<KIFMMRigidBodies *>(lmp->modify->fix[i]) &&
+          lmp->modify->fix[i]->igroup == nb->ex_mol_group[k])
+        bodies = true;
+    if (!bodies)
+      add(fmt::format("molecule/{} {}", nb->ex_mol_intra[k] ? "intra" : "inter",
+                      lmp->group->names[nb->ex_mol_group[k]]));
+  }
+  return list;
 }
 const char *error_variable = "kifmm_error";    // also in kspace_kifmm_error.cpp
 const char *timing_fix_id = "KIFMM_TIMING";
@@ -143,6 +169,15 @@ void KSpaceKIFMM::init()
                    "kspace_style kifmm computes the full coulomb sum; the coulomb part of pair "
                    "style {} is counted twice",
                    force->pair_style);
+  // neighbor exclusions act on the pair style's neighbor lists, not on this full sum
+  if (comm->me == 0) {
+    const std::string excluded = unapplied_exclusions(lmp);
+    if (!excluded.empty())
+      error->warning(FLERR,
+                     "kspace_style kifmm sums all pairs: neigh_modify exclude ({}) does not "
+                     "apply to the long-range sum",
+                     excluded);
+  }
 
   kifmm::Options opt;
   double est = 0.0;

@@ -485,6 +485,29 @@ run 0
   EXPECT_GT(std::fabs(r1[1][VY]), 0.0);
 }
 
+// The intra-clump exclusion of the fix is also what kspace kifmm does (it leaves the pairs
+// inside a clump out): no warning for it; other exclusions are not applied and named.
+TEST_F(FixClumpRigidTest, KifmmWarnsOnlyAboutExclusionsItDoesNotApply)
+{
+  commands(box_commands(0.2, "f f f"));
+  commands("molecule dim " + dimer_file + R"(
+create_atoms 0 single 0 0 0 mol dim 11
+create_atoms 0 single 0.05 0 0 mol dim 12
+set group all charge 1e-6
+pair_style zero 0.02
+pair_coeff * *
+kspace_style kifmm 1e-6
+fix c all clump/rigid density 2500
+)");
+  std::string out = captured("run 0 post no");
+  EXPECT_EQ(out.find("does not apply to the long-range sum"), std::string::npos) << out;
+  out = captured("neigh_modify exclude molecule/inter all\nrun 0 post no");
+  EXPECT_NE(out.find("WARNING: kspace_style kifmm sums all pairs: neigh_modify exclude "
+                     "(molecule/inter all) does not apply"),
+            std::string::npos)
+      << out;
+}
+
 namespace {
 // restitution of a linear spring-dashpot contact M x'' = -k x - c x'
 double restitution(double m, double k, double c)

@@ -381,6 +381,20 @@ TEST_F(KSpaceKifmm, CoulombPairStyleGivesDoubleCountingWarning)
   EXPECT_NE(out.find("counted twice"), std::string::npos) << out;
 }
 
+TEST_F(KSpaceKifmm, NeighborExclusionsGiveAWarning)
+{
+  load(uniform_cube(100, 1));
+  commands("group a id 1:10\nneigh_modify exclude type 1 1\nneigh_modify exclude group a a\n"
+           "pair_style zero 0.01\npair_coeff * *\nkspace_style kifmm 1e-4");
+  std::string out = captured("run 0 post no");
+  EXPECT_NE(out.find("WARNING: kspace_style kifmm sums all pairs: neigh_modify exclude (type 1 1, "
+                     "group a a) does not apply to the long-range sum"),
+            std::string::npos)
+      << out;
+  out = captured("neigh_modify exclude none\nrun 0 post no");
+  EXPECT_EQ(out.find("does not apply to the long-range sum"), std::string::npos) << out;
+}
+
 // ---------------------------------------------------------------- dynamics
 
 TEST_F(KSpaceKifmm, GranularWallsRunWithKifmm)

@@ -24,6 +24,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <mpi.h>
 #include <random>
 
@@ -36,6 +37,15 @@ std::string default_cache_dir()
   if (const char *env = std::getenv("KIFMM_CACHE_DIR")) return env;
   if (const char *xdg = std::getenv("XDG_CACHE_HOME")) return std::string(xdg) + "/lammps-kifmm";
   if (const char *home = std::getenv("HOME")) return std::string(home) + "/.cache/lammps-kifmm";
+  return "";
+}
+// Creates the cache directory if it is missing; returns why it cannot be used (empty: usable).
+std::string make_cache_dir(const std::string &dir)
+{
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return ec.message();
+  if (!std::filesystem::is_directory(dir, ec)) return "not a directory";
   return "";
 }
 // The neigh_modify exclusions that the long-range sum does not apply, as "type 1 2, group a b,
@@ -207,6 +217,20 @@ void KSpaceKIFMM::init()
     opt.cache_dir.clear();
   else
     opt.cache_dir = kset.cache_dir.empty() ? default_cache_dir() : kset.cache_dir;
+  // a missing cache directory is created (on rank 0); if that fails, memory only
+  if (!opt.cache_dir.empty()) {
+    std::string why = comm->me == 0 ? make_cache_dir(opt.cache_dir) : std::string();
+    int failed = !why.empty();
+    MPI_Bcast(&failed, 1, MPI_INT, 0, world);
+    if (failed) {
+      if (comm->me == 0)
+        error->warning(FLERR,
+                       "kspace_style kifmm: cannot create the operator cache directory {} ({}): "
+                       "caching on disk is off, every new process computes the operators again",
+                       opt.cache_dir, why);
+      opt.cache_dir.clear();
+    }
+  }
   opt.periodic = periodic;
   // periodic single-level grid: given by kspace_modify kifmm grid K, or (grid auto, no leaf
   // size given) chosen with the tree below (yukawa: back to the octree when the box changes

@@ -165,6 +165,22 @@ void FixKIFMMStride::setup(int)
                        : std::string("k_DEM unknown (give kdem K for a recommended N)\n");
   }
   utils::logmesg(lmp, mesg);
+  // no step of this run after its first is a multiple of N: no evaluation during the run
+  if (!auto_mode && update->whichflag == 1 && update->nsteps > 0 && update->firststep >= 0 &&
+      update->laststep / nevery == update->firststep / nevery) {
+    std::string what;
+    if (mode == Mode::Impulse)
+      what = update->firststep % nevery == 0
+          ? fmt::format("mode impulse: the kick of step {} only", update->firststep)
+          : std::string("mode impulse: no long-range force");
+    else
+      what = last_eval_step >= 0 ? fmt::format("the forces of step {} are held throughout", last_eval_step)
+                                 : std::string("no long-range forces are held");
+    error->warning(FLERR,
+                   "fix kifmm/stride: N = {} is longer than this run of {} steps (steps {} to {}): "
+                   "the long-range forces are not evaluated again during the run ({})",
+                   nevery, update->nsteps, update->firststep, update->laststep, what);
+  }
 }
 
 // ---------------------------------------------------------------- schedule

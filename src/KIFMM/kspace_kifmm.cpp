@@ -9,10 +9,13 @@
 #include "comm.h"
 #include "domain.h"
 #include "error.h"
+#include "fix.h"
 #include "force.h"
+#include "group.h"
 #include "input.h"
 #include "memory.h"
 #include "modify.h"
+#include "neighbor.h"
 #include "pair.h"
 #include "update.h"
 #include "utils.h"
@@ -21,6 +24,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <mpi.h>
 #include <random>
 
@@ -34,6 +38,38 @@ std::string default_cache_dir()
   if (const char *xdg = std::getenv("XDG_CACHE_HOME")) return std::string(xdg) + "/lammps-kifmm";
   if (const char *home = std::getenv("HOME")) return std::string(home) + "/.cache/lammps-kifmm";
   return "";
+}
+// Creates the cache directory if it is missing; returns why it cannot be used (empty: usable).
+std::string make_cache_dir(const std::string &dir)
+{
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return ec.message();
+  if (!std::filesystem::is_directory(dir, ec)) return "not a directory";
+  return "";
+}
+// The neigh_modify exclusions that the long-range sum does not apply, as "type 1 2, group a b,
+// ...": all of them but molecule/intra on the group of a fix whose rigid bodies the kspace
+// leaves out (fix clump/rigid: the pairs inside one clump).
+std::string unapplied_exclusions(LAMMPS *lmp)
+{
+  const Neighbor *nb = lmp->neighbor;
+  std::string list;
+  auto add = [&](const std::string &item) { list += (list.empty() ? "" : ", ") + item; };
+  for (int k = 0; k < nb->nex_type; ++k) add(fmt::format("type {} {}", nb->ex1_type[k], nb->ex2_type[k]));
+  for (int k = 0; k < nb->nex_group; ++k)
+    add(fmt::format("group {} {}", lmp->group->names[nb->ex1_group[k]], lmp->group->names[nb->ex2_group[k]]));
+  for (int k = 0; k < nb->nex_mol; ++k) {
+    bool bodies = false;
+    for (int i = 0; i < lmp->modify->nfix && nb->ex_mol_intra[k]; ++i)
+      if (dynamic_cast<KIFMMRigidBodies *>(lmp->modify->fix[i]) &&
+          lmp->modify->fix[i]->igroup == nb->ex_mol_group[k])
+        bodies = true;
+    if (!bodies)
+      add(fmt::format("molecule/{} {}", nb->ex_mol_intra[k] ? "intra" : "inter",
+                      lmp->group->names[nb->ex_mol_group[k]]));
+  }
+  return list;
 }
 const char *error_variable = "kifmm_error";    // also in kspace_kifmm_error.cpp
 const char *timing_fix_id = "KIFMM_TIMING";
@@ -113,6 +149,10 @@ double KSpaceKIFMM::energy_prefactor() const
 
 void KSpaceKIFMM::init()
 {
+  if (domain->dimension == 2)
+    error->all(FLERR,
+               "kspace_style kifmm does not support dimension 2: its kernels (coulomb, gravity, "
+               "yukawa) are the 3-d ones");
   if (domain->triclinic)
     error->all(FLERR, "kspace_style kifmm does not support triclinic boxes");
   if (kset.kernel == LongRangeKernel::Gravity) {
@@ -139,6 +179,15 @@ void KSpaceKIFMM::init()
                    "kspace_style kifmm computes the full coulomb sum; the coulomb part of pair "
                    "style {} is counted twice",
                    force->pair_style);
+  // neighbor exclusions act on the pair style's neighbor lists, not on this full sum
+  if (comm->me == 0) {
+    const std::string excluded = unapplied_exclusions(lmp);
+    if (!excluded.empty())
+      error->warning(FLERR,
+                     "kspace_style kifmm sums all pairs: neigh_modify exclude ({}) does not "
+                     "apply to the long-range sum",
+                     excluded);
+  }
 
   kifmm::Options opt;
   double est = 0.0;
@@ -168,6 +217,20 @@ void KSpaceKIFMM::init()
     opt.cache_dir.clear();
   else
     opt.cache_dir = kset.cache_dir.empty() ? default_cache_dir() : kset.cache_dir;
+  // a missing cache directory is created (on rank 0); if that fails, memory only
+  if (!opt.cache_dir.empty()) {
+    std::string why = comm->me == 0 ? make_cache_dir(opt.cache_dir) : std::string();
+    int failed = !why.empty();
+    MPI_Bcast(&failed, 1, MPI_INT, 0, world);
+    if (failed) {
+      if (comm->me == 0)
+        error->warning(FLERR,
+                       "kspace_style kifmm: cannot create the operator cache directory {} ({}): "
+                       "caching on disk is off, every new process computes the operators again",
+                       opt.cache_dir, why);
+      opt.cache_dir.clear();
+    }
+  }
   opt.periodic = periodic;
   // periodic single-level grid: given by kspace_modify kifmm grid K, or (grid auto, no leaf
   // size given) chosen with the tree below (yukawa: back to the octree when the box changes

@@ -62,6 +62,34 @@ void matrix_to_itensor(const Mat3 &m, double t[6])
   t[5] = 0.5 * (m[0][1] + m[1][0]);
 }
 
+// Collective: an error when another rigid-body fix (style rigid...) has atoms of the clump fix
+// `self` in its group (both would integrate them). `own_rigid` is the ID of self's internal
+// rigid fix; the internal rigid fix of another fix clump/rigid is named by that fix.
+void check_other_rigid_fixes(LAMMPS *lmp, Fix *self, const std::string &own_rigid)
+{
+  Modify *modify = lmp->modify;
+  const int *mask = lmp->atom->mask;
+  for (int k = 0; k < modify->nfix; ++k) {
+    Fix *other = modify->fix[k];
+    if (other == self || own_rigid == other->id || !utils::strmatch(other->style, "^rigid")) continue;
+    int mine = 0, any = 0;
+    for (int i = 0; i < lmp->atom->nlocal && !mine; ++i)
+      if ((mask[i] & self->groupbit) && (mask[i] & other->groupbit)) mine = 1;
+    MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_MAX, lmp->world);
+    if (!any) continue;
+    Fix *named = other;
+    for (int j = 0; j < modify->nfix; ++j)
+      if (strcmp(modify->fix[j]->style, "clump/rigid") == 0 &&
+          std::string(modify->fix[j]->id) + "_rigid" == other->id)
+        named = modify->fix[j];
+    lmp->error->all(FLERR,
+                    "Fix clump/rigid {} and fix {} ({}) act on the same atoms (groups {} and {}): "
+                    "an atom can belong to one rigid-body fix only",
+                    self->id, named->id, named->style, lmp->group->names[self->igroup],
+                    lmp->group->names[named->igroup]);
+  }
+}
+
 }    // namespace
 
 /* ---------------------------------------------------------------------- */
@@ -266,6 +294,7 @@ Fix *FixClumpRigid::rigid_fix()
 void FixClumpRigid::init()
 {
   Fix *r = rigid_fix();
+  check_other_rigid_fixes(lmp, this, id_rigid);
   int dim;
   // clump values are computed again in every run (charges or pebbles may have changed), and
   // the pebble counts checked again

@@ -485,6 +485,29 @@ run 0
   EXPECT_GT(std::fabs(r1[1][VY]), 0.0);
 }
 
+// The intra-clump exclusion of the fix is also what kspace kifmm does (it leaves the pairs
+// inside a clump out): no warning for it; other exclusions are not applied and named.
+TEST_F(FixClumpRigidTest, KifmmWarnsOnlyAboutExclusionsItDoesNotApply)
+{
+  commands(box_commands(0.2, "f f f"));
+  commands("molecule dim " + dimer_file + R"(
+create_atoms 0 single 0 0 0 mol dim 11
+create_atoms 0 single 0.05 0 0 mol dim 12
+set group all charge 1e-6
+pair_style zero 0.02
+pair_coeff * *
+kspace_style kifmm 1e-6
+fix c all clump/rigid density 2500
+)");
+  std::string out = captured("run 0 post no");
+  EXPECT_EQ(out.find("does not apply to the long-range sum"), std::string::npos) << out;
+  out = captured("neigh_modify exclude molecule/inter all\nrun 0 post no");
+  EXPECT_NE(out.find("WARNING: kspace_style kifmm sums all pairs: neigh_modify exclude "
+                     "(molecule/inter all) does not apply"),
+            std::string::npos)
+      << out;
+}
+
 namespace {
 // restitution of a linear spring-dashpot contact M x'' = -k x - c x'
 double restitution(double m, double k, double c)
@@ -768,6 +791,35 @@ TEST_F(FixClumpRigidTest, TemplateWithOverflowingCoordinatesIsAnError)
   EXPECT_LAMMPS_ERROR(command("fix c all clump/rigid density 2500 mol far"),
                       "ERROR: Fix clump/rigid molecule template far: pebble 2 is farther than "
                       "1e\\+09 largest radii from pebble 1");
+}
+
+TEST_F(FixClumpRigidTest, AnotherRigidFixOnTheSameAtomsIsAnError)
+{
+  commands(box_commands());
+  commands("molecule dim " + dimer_file + R"(
+create_atoms 0 single -0.05 0 0 mol dim 12
+create_atoms 0 single 0.05 0 0 mol dim 13
+group first molecule 1
+group second molecule 2
+pair_style zero 0.02
+pair_coeff * *
+timestep 1e-5
+)");
+  // other atoms: both fixes run
+  commands("fix c first clump/rigid density 2500\nfix r second rigid/small molecule\nrun 2");
+  EXPECT_EQ(evaluate("f_c[1]"), 1.0);
+  commands("unfix r");
+  // LAMMPS would stop later with "Lost atoms" or a missing body atom
+  command("fix r all rigid/nve/small molecule");
+  EXPECT_LAMMPS_ERROR(command("run 2"),
+                      "ERROR: Fix clump/rigid c and fix r \\(rigid/nve/small\\) act on the same "
+                      "atoms \\(groups first and all\\)");
+  commands("unfix r\nfix r first rigid single");
+  EXPECT_LAMMPS_ERROR(command("run 2"), "Fix clump/rigid c and fix r \\(rigid\\) act on the same");
+  // another clump fix (through its internal rigid fix c2_rigid) is named as itself
+  commands("unfix r\nfix c2 all clump/rigid density 2500");
+  EXPECT_LAMMPS_ERROR(command("run 2"),
+                      "Fix clump/rigid c and fix c2 \\(clump/rigid\\) act on the same atoms");
 }
 
 TEST_F(FixClumpRigidTest, BadArgumentsAreErrors)

@@ -180,6 +180,17 @@ TEST_F(HardCases, TriclinicBoxIsAClearError)
   EXPECT_LAMMPS_ERROR(command("run 0"), "kifmm does not support triclinic boxes");
 }
 
+TEST_F(HardCases, Dimension2IsAClearError)
+{
+  // a cubic periodic box: without the check the 3-d periodic sum would run
+  commands("units lj\ndimension 2\natom_style charge\nboundary p p p\n"
+           "region box block 0 1 0 1 -0.5 0.5\ncreate_box 1 box\nmass 1 1.0\n"
+           "create_atoms 1 single 0.2 0.2 0.0\ncreate_atoms 1 single 0.7 0.6 0.0\n"
+           "set atom 1 charge 1.0\nset atom 2 charge -1.0\npair_style zero 0.01\n"
+           "pair_coeff * *\nkspace_style kifmm 1e-4");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "kifmm does not support dimension 2: its kernels");
+}
+
 TEST_F(HardCases, NonFiniteCoordinateStopsTheRunWithAnError)
 {
   box("create_atoms 1 single 0.2 0.2 0.2\ncreate_atoms 1 single 0.7 0.7 0.7\n"

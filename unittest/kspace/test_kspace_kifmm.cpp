@@ -13,7 +13,11 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <mpi.h>
+#include <unistd.h>
 
 using namespace kifmm_test;
 
@@ -399,6 +403,89 @@ TEST_F(KSpaceKifmm, CoulombPairStyleGivesDoubleCountingWarning)
   commands("pair_style coul/cut 2.0\npair_coeff * *\nkspace_style kifmm 1e-4");
   const std::string out = captured("run 0 post no");
   EXPECT_NE(out.find("counted twice"), std::string::npos) << out;
+}
+
+TEST_F(KSpaceKifmm, NeighborExclusionsGiveAWarning)
+{
+  load(uniform_cube(100, 1));
+  commands("group a id 1:10\nneigh_modify exclude type 1 1\nneigh_modify exclude group a a\n"
+           "pair_style zero 0.01\npair_coeff * *\nkspace_style kifmm 1e-4");
+  std::string out = captured("run 0 post no");
+  EXPECT_NE(out.find("WARNING: kspace_style kifmm sums all pairs: neigh_modify exclude (type 1 1, "
+                     "group a a) does not apply to the long-range sum"),
+            std::string::npos)
+      << out;
+  out = captured("neigh_modify exclude none\nrun 0 post no");
+  EXPECT_EQ(out.find("does not apply to the long-range sum"), std::string::npos) << out;
+}
+
+// The operator cache directory: a missing one is created, one that cannot be created turns
+// caching on disk off with a warning (the run continues in memory only).
+class CacheDirectory : public KSpaceKifmm {
+ protected:
+  std::string saved, base;
+  bool had = false;
+  void SetUp() override
+  {
+    KSpaceKifmm::SetUp();
+    if (const char *v = std::getenv("KIFMM_CACHE_DIR")) {
+      had = true;
+      saved = v;
+    }
+    base = testing::TempDir() + "kifmm_cache_test_" + std::to_string(getpid());
+    std::filesystem::remove_all(base);
+  }
+  void TearDown() override
+  {
+    if (had) setenv("KIFMM_CACHE_DIR", saved.c_str(), 1);
+    else unsetenv("KIFMM_CACHE_DIR");
+    std::filesystem::remove_all(base);
+    KSpaceKifmm::TearDown();
+  }
+  std::string run_kifmm(const std::string &modify = "")
+  {
+    load(uniform_cube(100, 1));
+    commands("pair_style zero 0.01\npair_coeff * *\nkspace_style kifmm 1e-4");
+    if (!modify.empty()) command("kspace_modify kifmm " + modify);
+    return captured("run 0 post no");
+  }
+};
+
+TEST_F(CacheDirectory, MissingDirectoryIsCreated)
+{
+  const std::string dir = base + "/env/lammps-kifmm";
+  setenv("KIFMM_CACHE_DIR", dir.c_str(), 1);
+  std::string out = run_kifmm();
+  EXPECT_TRUE(std::filesystem::is_directory(dir)) << out;
+  EXPECT_NE(out.find("operator cache = " + dir + "\n"), std::string::npos) << out;
+  EXPECT_EQ(out.find("WARNING: kspace_style kifmm"), std::string::npos) << out;
+  // kspace_modify kifmm cache DIR
+  const std::string dir2 = base + "/keyword/ops";
+  create();
+  out = run_kifmm("cache " + dir2);
+  EXPECT_TRUE(std::filesystem::is_directory(dir2)) << out;
+  EXPECT_NE(out.find("operator cache = " + dir2 + "\n"), std::string::npos) << out;
+}
+
+TEST_F(CacheDirectory, DirectoryThatCannotBeCreatedMeansMemoryOnly)
+{
+  std::filesystem::create_directories(base);
+  const std::string file = base + "/plain_file";
+  std::ofstream(file) << "not a directory\n";
+  const std::string dir = file + "/lammps-kifmm";
+  setenv("KIFMM_CACHE_DIR", dir.c_str(), 1);
+  std::string out = run_kifmm();
+  EXPECT_NE(out.find("WARNING: kspace_style kifmm: cannot create the operator cache directory " +
+                     dir + " (Not a directory): caching on disk is off"),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find("operator cache = memory only"), std::string::npos) << out;
+  EXPECT_TRUE(std::isfinite(thermo("elong")));
+  // the same through kspace_modify kifmm cache DIR
+  create();
+  out = run_kifmm("cache " + file);
+  EXPECT_NE(out.find("cannot create the operator cache directory " + file), std::string::npos) << out;
+  EXPECT_NE(out.find("operator cache = memory only"), std::string::npos) << out;
 }
 
 // ---------------------------------------------------------------- dynamics

@@ -421,6 +421,49 @@ TEST_F(Stride, AutoChoosesNFromTheProbe)
   printf("  auto: k_LR = %.4g, S = %.3g, N = %g\n", fv(6), s, fv(1));
 }
 
+TEST_F(Stride, NLongerThanTheRunIsAWarning)
+{
+  commands(charged_cube());
+  auto count = [](const std::string &out) {
+    std::size_t n = 0;
+    for (std::size_t at = out.find("WARNING: fix kifmm/stride: N = "); at != std::string::npos;
+         at = out.find("WARNING: fix kifmm/stride: N = ", at + 1))
+      ++n;
+    return n;
+  };
+  command("fix st all kifmm/stride 1000000");
+  std::string out = capture([&] { command("run 100 post no"); });
+  EXPECT_EQ(count(out), 1u) << out;
+  EXPECT_NE(out.find("WARNING: fix kifmm/stride: N = 1000000 is longer than this run of 100 steps "
+                     "(steps 0 to 100): the long-range forces are not evaluated again during the "
+                     "run (the forces of step 0 are held throughout)"),
+            std::string::npos)
+      << out;
+  out = capture([&] { command("run 0 post no"); });
+  EXPECT_EQ(count(out), 0u) << out;
+  // steps 100 to 200 hold the multiple 150; 200 to 300 hold 300; 300 to 340 none
+  commands("unfix st\nfix st all kifmm/stride 150");
+  out = capture([&] { commands("run 100 post no\nrun 100 post no"); });
+  EXPECT_EQ(count(out), 0u) << out;
+  out = capture([&] { command("run 40 post no"); });
+  EXPECT_EQ(count(out), 1u) << out;
+  EXPECT_NE(out.find("N = 150 is longer than this run of 40 steps (steps 300 to 340)"),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find("(the forces of step 300 are held throughout)"), std::string::npos) << out;
+  commands("unfix st\nfix st all kifmm/stride 1000 mode impulse");
+  out = capture([&] { command("run 20 post no"); });
+  EXPECT_NE(out.find("N = 1000 is longer than this run of 20 steps (steps 340 to 360): the "
+                     "long-range forces are not evaluated again during the run (mode impulse: no "
+                     "long-range force)"),
+            std::string::npos)
+      << out;
+  // auto chooses N itself
+  commands("unfix st\nfix st all kifmm/stride auto kdem 200.0");
+  out = capture([&] { command("run 20 post no"); });
+  EXPECT_EQ(count(out), 0u) << out;
+}
+
 // ---------------------------------------------------------------- errors
 
 TEST_F(Stride, ErrorsNameTheProblem)

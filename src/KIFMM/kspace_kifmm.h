@@ -84,6 +84,7 @@ class KSpaceKIFMM : public KSpace {
   static constexpr double verify_margin = 0.75;    // sampled error wanted: 3/4 of the request
   bool verify_pending = false;
   double verified_error = -1.0;
+  int raised_order = 0;    // order the last measurement raised to (0: none), kept across runs
   void verify_accuracy(bool want_potential, double &comm_time, std::size_t &nsrc);
 
   // rigid bodies (fix clump/rigid, KIFMMRigidBodies): the pairs inside each body are left out

@@ -258,6 +258,7 @@ void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::s
                      from, was, target, engine_options.order, m.worst(), m.describe());
   }
   verified_error = m.worst();
+  if (engine_options.order > raised_order) raised_order = engine_options.order;
   if (comm->me == 0) {
     if (m.worst() > kset.accuracy)
       error->warning(FLERR,

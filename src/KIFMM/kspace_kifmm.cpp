@@ -106,7 +106,7 @@ int KSpaceKIFMM::modify_param(int narg, char **arg)
   std::string why = kifmm_lammps::parse_kifmm_keywords(args, kset, consumed);
   if (!why.empty()) error->all(FLERR, why);
   engine.reset();    // settings changed: new evaluator at init
-  raised_order = 0;
+  chosen_order = 0;
   if (kset.check_every > 0) {
     // the measured error goes to an internal-style variable usable as v_kifmm_error
     int ivar = input->variable->find(error_variable);
@@ -204,8 +204,8 @@ void KSpaceKIFMM::init()
     kifmm::Choice c = kifmm::choose_order(kernel, kset.accuracy, periodic);
     opt.order = c.order;
     est = c.measured_error;
-    // a previous run of these settings measured that a higher order is needed: start there
-    if (raised_order > opt.order) opt.order = raised_order;
+    // a previous run of these settings measured which order meets the request: start there
+    if (chosen_order > 0) opt.order = chosen_order;
   }
   // leaf size: given (kspace_modify kifmm leaf); else one rank: chosen from the atom positions
   // at the first evaluation of the run (choose_tree_from_atoms: the modelled cost of the actual

@@ -79,12 +79,13 @@ class KSpaceKIFMM : public KSpace {
   MeasuredError measure_error(int nsamples);
   void check_error();
   // order from the accuracy: at the first evaluation of a run the error is measured on the
-  // atoms and the order raised until the request is met
+  // atoms and the order raised until the request is met, or lowered while it is still met
   static constexpr int verify_samples = 1000;
   static constexpr double verify_margin = 0.75;    // sampled error wanted: 3/4 of the request
   bool verify_pending = false;
   double verified_error = -1.0;
-  int raised_order = 0;    // order the last measurement raised to (0: none), kept across runs
+  int chosen_order = 0;    // order the last measurement settled on (0: none), kept across runs
+  static constexpr int min_tried_order = 3;    // lowest order the measurement tries
   void verify_accuracy(bool want_potential, double &comm_time, std::size_t &nsrc);
 
   // rigid bodies (fix clump/rigid, KIFMMRigidBodies): the pairs inside each body are left out

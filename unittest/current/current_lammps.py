@@ -1,0 +1,236 @@
+#!/usr/bin/env python3
+"""The plugin in a current LAMMPS (a LAMMPS built from its sources, `plugin load`), against
+lmp_kifmm (Debian's LAMMPS with the styles built in) and against itself on two ranks.
+
+usage: current_lammps.py CASE --lmp LMP --plugin kifmmplugin.so [options]
+
+cases:
+  kspace   a fixed kifmm input (open box, 500 charges, explicit order and leaf, fix
+           kifmm/stride 2, 20 steps): forces at steps 0, 10, 20 equal those of --reference
+           (lmp_kifmm) to 1e-12 relative
+  mpi      the same input on 2 ranks (--mpirun) equals 1 rank to 1e-10
+  clumps   fix clump/rigid with a molecule template, fix pour (rigid keyword) and the gravity
+           keyword, charged pebbles under kspace kifmm: 5 clumps inserted with the union mass,
+           the mean clump velocity gains exactly -g N dt per run of N steps
+  python   the same kifmm input through that LAMMPS's own Python module (--pythonpath, the
+           directory of its liblammps.so: --libdir): energy equal to the lmp run's
+Exit status 0 on success; prints what was compared.
+"""
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+
+KSPACE_INPUT = """\
+units lj
+atom_style charge
+atom_modify map array
+boundary f f f
+read_data data.kspace
+mass * 1.0
+pair_style zero 1.0
+pair_coeff * *
+kspace_style kifmm 1e-8
+kspace_modify kifmm order 8 leaf 20
+neighbor 0.3 bin
+variable vx atom 0.3*sin(0.7*x+0.1*y)
+variable vy atom 0.2*cos(0.5*z)
+variable vz atom -0.1*sin(0.9*y)
+velocity all set v_vx v_vy v_vz
+fix nve all nve
+fix st all kifmm/stride 2
+timestep 0.001
+thermo_style custom step pe elong ke
+thermo_modify norm no format float %.15g
+dump d all custom 10 forces.*.dump id x y z fx fy fz
+dump_modify d format float %.17g sort id
+run 20
+print "ELONG $(elong:%.17g)"
+"""
+
+CLUMP_INPUT = """\
+units si
+atom_style hybrid sphere charge
+atom_modify map array
+boundary p p f
+fix prop all property/atom mol ghost yes
+region box block -0.1 0.1 -0.1 0.1 -0.1 0.1
+create_box 2 box
+mass * 1.0
+comm_modify cutoff 0.08 vel yes
+neighbor 0.002 bin
+molecule dip {potentials}/dipole3.mol
+pair_style zero 0.02
+pair_coeff * *
+timestep 1e-4
+group nothing empty
+fix grav nothing gravity 9.81 vector 0 0 -1
+region slab block -0.08 0.08 -0.08 0.08 0.0 0.09
+fix c all clump/rigid density 2500 mol dip gravity grav
+fix p all pour 5 0 4767548 vol 0.05 50 region slab mol dip rigid c
+compute msum all reduce sum c_c_local[3] inputs local
+variable vz equal vcm(all,z)
+thermo_style custom step f_c[1] c_msum
+run 1
+print "COUNT $(f_c[1]) MASS $(c_msum:%.15g) VZ0 $(v_vz:%.17g)"
+run 200
+print "VZ1 $(v_vz:%.17g)"
+run 400
+print "VZ2 $(v_vz:%.17g)"
+"""
+
+
+def write_charges(path, n=500, box=10.0):
+    """n charges +-1 at fixed pseudo-random positions (a linear congruential generator)."""
+    state = 12345
+
+    def rnd():
+        nonlocal state
+        state = (1103515245 * state + 12345) % 2147483648
+        return state / 2147483648.0
+
+    lines = ["charges for the current-LAMMPS test", "", f"{n} atoms", "1 atom types", "",
+             f"-1 {box + 1} xlo xhi", f"-1 {box + 1} ylo yhi", f"-1 {box + 1} zlo zhi", "",
+             "Atoms # charge", ""]
+    for i in range(n):
+        q = 1 if i % 2 == 0 else -1
+        lines.append(f"{i + 1} 1 {q} {box * rnd():.12f} {box * rnd():.12f} {box * rnd():.12f}")
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+def run(cmd, cwd, env=None):
+    print("running:", " ".join(cmd), flush=True)
+    p = subprocess.run(cmd, cwd=cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                       text=True)
+    if p.returncode != 0:
+        print(p.stdout[-4000:])
+        sys.exit(f"command failed with status {p.returncode}")
+    return p.stdout
+
+
+def read_dumps(d):
+    out = {}
+    for name in sorted(os.listdir(d)):
+        m = re.match(r"forces\.(\d+)\.dump$", name)
+        if not m:
+            continue
+        rows = {}
+        with open(os.path.join(d, name)) as f:
+            lines = f.read().splitlines()
+        start = next(i for i, l in enumerate(lines) if l.startswith("ITEM: ATOMS")) + 1
+        for l in lines[start:]:
+            v = l.split()
+            rows[int(v[0])] = [float(x) for x in v[1:]]
+        out[int(m.group(1))] = rows
+    return out
+
+
+def kspace_dir(lmp_cmd, plugin, work, name):
+    d = os.path.join(work, name)
+    os.makedirs(d)
+    write_charges(os.path.join(d, "data.kspace"))
+    text = (f"plugin load {plugin}\n" if plugin else "") + KSPACE_INPUT
+    with open(os.path.join(d, "in.kspace"), "w") as f:
+        f.write(text)
+    out = run(lmp_cmd + ["-in", "in.kspace", "-log", "log.lammps", "-nocite"], d)
+    return d, out
+
+
+def compare(a, b, tol, what):
+    worst = 0.0
+    for step, rows in b.items():
+        if step not in a:
+            sys.exit(f"{what}: step {step} missing")
+        scale = max(max(abs(v) for v in r[3:]) for r in rows.values())
+        xscale = max(max(abs(v) for v in r[:3]) for r in rows.values())
+        for i, r in rows.items():
+            s = a[step][i]
+            for k in range(6):
+                d = abs(s[k] - r[k]) / (scale if k >= 3 else xscale)
+                worst = max(worst, d)
+    print(f"{what}: largest difference {worst:.3e} (relative to the largest force/coordinate),"
+          f" tolerance {tol:g}, steps {sorted(b)}")
+    if worst > tol:
+        sys.exit(f"{what}: differ by {worst:.3e} > {tol:g}")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("case", choices=["kspace", "mpi", "clumps", "python"])
+    ap.add_argument("--lmp", required=True)
+    ap.add_argument("--plugin", required=True)
+    ap.add_argument("--reference", help="lmp_kifmm (kspace)")
+    ap.add_argument("--mpirun", nargs="+", help="mpirun command and its options (mpi)")
+    ap.add_argument("--potentials", help="the package's potentials/ (clumps)")
+    ap.add_argument("--pythonpath", help="that LAMMPS's python/ directory (python)")
+    ap.add_argument("--libdir", help="directory of that LAMMPS's liblammps.so (python)")
+    a = ap.parse_args()
+    plugin = os.path.abspath(a.plugin)
+    work = tempfile.mkdtemp(prefix=f"current-lammps-{a.case}-")
+    try:
+        if a.case == "kspace":
+            d1, _ = kspace_dir([a.lmp], plugin, work, "current")
+            d2, _ = kspace_dir([a.reference], None, work, "reference")
+            compare(read_dumps(d1), read_dumps(d2), 1e-12, "plugin in current LAMMPS vs lmp_kifmm")
+        elif a.case == "mpi":
+            d1, _ = kspace_dir([a.lmp], plugin, work, "np1")
+            d2, out = kspace_dir(a.mpirun + ["-np", "2", a.lmp], plugin, work, "np2")
+            if "2 by 1 by 1 MPI processor grid" not in out and "MPI processor grid" not in out:
+                sys.exit("the np 2 run did not report its processor grid")
+            compare(read_dumps(d2), read_dumps(d1), 1e-10, "2 ranks vs 1 rank")
+        elif a.case == "clumps":
+            d = os.path.join(work, "clumps")
+            os.makedirs(d)
+            with open(os.path.join(d, "in.clumps"), "w") as f:
+                f.write(f"plugin load {plugin}\n" + CLUMP_INPUT.format(potentials=os.path.abspath(a.potentials))
+                        + "kspace_style kifmm 1e-6\nrun 10\nprint \"KIFMM DONE $(elong:%.10g)\"\n")
+            out = run([a.lmp, "-in", "in.clumps", "-log", "log.lammps", "-nocite"], d)
+            m = re.search(r"^COUNT (\S+) MASS (\S+) VZ0 (\S+)$", out, re.M)
+            v1 = float(re.search(r"^VZ1 (\S+)$", out, re.M).group(1))
+            v2 = float(re.search(r"^VZ2 (\S+)$", out, re.M).group(1))
+            count, mass, v0 = float(m.group(1)), float(m.group(2)), float(m.group(3))
+            union = 3 * 2500 * 4.0 / 3.0 * 3.141592653589793 * 0.005 ** 3
+            print(f"clumps {count:g}, total mass {mass:.10g} (5 x union {5 * union:.10g}), "
+                  f"dvz per 200 steps {v1 - v0:.12g}, per 400 {v2 - v1:.12g} (g N dt: "
+                  f"{-9.81 * 200e-4:.12g}, {-9.81 * 400e-4:.12g})")
+            if count != 5:
+                sys.exit("fix pour did not insert 5 clumps")
+            if abs(mass / (5 * union) - 1) > 1e-5:
+                sys.exit("the clumps do not have the union mass")
+            if abs((v1 - v0) + 9.81 * 200e-4) > 1e-9 or abs((v2 - v1) + 9.81 * 400e-4) > 1e-9:
+                sys.exit("the clumps do not gain exactly -g N dt per run")
+            if "KIFMM DONE" not in out or "ERROR" in out:
+                sys.exit("kspace kifmm on the poured clumps failed")
+        else:
+            d1, out = kspace_dir([a.lmp], plugin, work, "lmp")
+            e_lmp = float(re.search(r"^ELONG (\S+)$", out, re.M).group(1))
+            d = os.path.join(work, "python")
+            os.makedirs(d)
+            write_charges(os.path.join(d, "data.kspace"))
+            with open(os.path.join(d, "in.kspace"), "w") as f:    # no plugin line, no dump
+                f.write("\n".join(l for l in KSPACE_INPUT.splitlines() if not l.startswith("dump")) + "\n")
+            with open(os.path.join(d, "run.py"), "w") as f:
+                f.write("from lammps import lammps\n"
+                        "lmp = lammps(cmdargs=['-log', 'none', '-nocite', '-screen', 'none'])\n"
+                        f"lmp.command('plugin load {plugin}')\n"
+                        "lmp.file('in.kspace')\n"
+                        "print('PYELONG %.17g' % lmp.get_thermo('elong'))\n")
+            env = dict(os.environ)
+            env["PYTHONPATH"] = os.path.abspath(a.pythonpath) + os.pathsep + env.get("PYTHONPATH", "")
+            env["LD_LIBRARY_PATH"] = os.path.abspath(a.libdir) + os.pathsep + env.get("LD_LIBRARY_PATH", "")
+            out = run([sys.executable, "run.py"], d, env)
+            e_py = float(re.search(r"^PYELONG (\S+)$", out, re.M).group(1))
+            print(f"elong: lmp {e_lmp:.17g}, python module {e_py:.17g}")
+            if abs(e_py - e_lmp) > 1e-12 * abs(e_lmp):
+                sys.exit("the Python run differs from the lmp run")
+        print("OK")
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()

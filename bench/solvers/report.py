@@ -952,9 +952,8 @@ def setup_table(recs):
     cpu = all("c_setup" in r and "c_eval" in r for r in rs)
     lines = [f"Uniform cube of {rs[0]['natoms']} atoms; setup = first `run 0` (includes one "
              "evaluation with energy); overhead = setup - eval. " +
-             ("CPU times." if cpu else "**Wall times** (this table was measured before the "
-              "switch to CPU time, under the load of the shared cores; it is not used in any "
-              "ratio).") + "\n",
+             ("CPU times." if cpu else "**Wall times** (these setup records have no CPU times; "
+              "the table is not used in any ratio).") + "\n",
              "| order P | eval [s] | setup, no cache [s] | overhead, no cache [s] | "
              "setup, operators from the disk cache [s] | overhead, cached [s] | operators [MB] |",
              "|---|---|---|---|---|---|---|"]

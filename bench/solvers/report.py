@@ -1933,6 +1933,9 @@ def main():
                                      "full_report.md")
     os.makedirs(args.plots, exist_ok=True)
     plots = {} if args.no_plots else make_plots(recs, args.plots, cases_of(recs), args.profile)
+    if not plots:    # no matplotlib, or --no-plots: link the plots already in the directory
+        plots = {fn[:-4]: os.path.join(args.plots, fn) for fn in sorted(os.listdir(args.plots))
+                 if re.fullmatch(r"(pareto_.*|time_vs_n|error_vs_order)\.png", fn)}
     write_doc(recs, full, plots, args.profile, args.cases, args.results, page=args.doc)
     write_page(recs, args.doc, plots, args.profile, args.results, full)
     return 0

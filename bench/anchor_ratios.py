@@ -1,11 +1,11 @@
 #!/usr/bin/env python3
 """Compares the rows of an engine benchmark table (bench_engine output, markdown) with the
-reference points of issue #3 (exafmm-t / PVFMM, 2 threads, evaluation only, unloaded machine).
+reference points (exafmm-t / PVFMM, 2 threads, evaluation only, no other job running).
 For each reference point the cheapest row (by 1-thread CPU time, the load-independent cost) of
 the same configuration and N whose measured force error is at or below the reference error is
 taken. Prints a markdown table:
-  eval / ref          2-thread wall time of ours over the reference time (our wall time is
-                      inflated by the other jobs on the shared machine)
+  eval / ref          2-thread wall time of ours over the reference time (our wall time
+                      includes any slowdown by other jobs on the same cores)
   CPU/2 / ref         our 1-thread CPU time halved (ideal 2-thread scaling) over the reference
   speed-up, ref s-u   speed-up over the direct sum: ours measured in the same run, the
                       reference's = direct time at 2.2e9 pairs/s over the reference time

@@ -5,11 +5,13 @@
 # (choose_tree(kernel, options, n, xyz)), timed interleaved on one thread; prints a markdown
 # table (stdout) and the modelled against measured times (stderr).
 #   bench/run_tree_choice.sh [BUILD_DIR] [extra bench_engine options]
-# BUILD_DIR (default /work/build-tree) must hold bench/bench_engine and bench_solvers (for the
-# clustered data files of the bench/solvers campaign, written to $BUILD_DIR/tree_choice_data).
+# BUILD_DIR (default: build/ of this checkout, or $KIFMM_BUILD_DIR) must hold bench/bench_engine
+# and bench_solvers (for the clustered data files of the bench/solvers campaign, written to
+# $BUILD_DIR/tree_choice_data). The first line of the output is the provenance (commit, date,
+# load average): keep it with the table in bench/results/.
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
-BUILD=${1:-/work/build-tree}
+BUILD=${1:-${KIFMM_BUILD_DIR:-$ROOT/build}}
 shift || true
 DATA="$BUILD/tree_choice_data"
 mkdir -p "$DATA"

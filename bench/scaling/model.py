@@ -3,10 +3,11 @@
 
     python3 bench/scaling/model.py [results.jsonl]
 
-Measured here (2-core machine, ranks oversubscribed beyond 2): CPU seconds per point of one
+Measured (on 2 cores, ranks oversubscribed beyond 2): CPU seconds per point of one
 rank, the extra CPU of the distributed runs per ghost point, ghost points per rank against
 the geometric halo model, bytes sent per rank. Assumed (no cluster here): network bandwidth
 BETA bytes/s per rank and latency ALPHA s per message; they are parameters of the table.
+The load average of each run is in its JSON line (loadavg); the tables leave it out.
 """
 import json
 import math
@@ -34,7 +35,7 @@ def choose_top_level(n, p, nsurf, max_depth=20, leaf_size=256):
 
 def halo_model(p, level):
     """ghosts/own when whole frontier cells are imported (the layer of frontier cells around a
-    cubic domain; before the locally essential trees, and still where frontier cells are leaves)"""
+    cubic domain; also the halo of locally essential trees where frontier cells are leaves)"""
     r = p ** (1.0 / 3.0) / 2 ** level
     return (1 + 2 * r) ** 3 - 1
 
@@ -78,7 +79,7 @@ def main():
     fits = []
     for r in rows:
         if r.get("tag", "").startswith(("let-", "whole-cells-")):
-            continue    # one evaluation each, forced top levels, loaded machine: not for the fit
+            continue    # one evaluation each, forced top levels: not for the fit
         if r["ranks"] == 2 and r["threads"] == 1 and r["N"] in one and r["ghosts_avg"] > 0:
             extra = r["cpu_sum"] / one[r["N"]]["cpu_sum"] - 1.0
             ghosts = r["ghosts_avg"] * r["ranks"] / r["N"]
@@ -88,22 +89,21 @@ def main():
     # slabs/columns, whose halo is smaller than the cubic-domain model at the same P)
     print("# measured (uniform, order 6)")
     print("| N | P | threads | top level | own/rank | ghosts/rank avg (max) | ghosts/own | model (1+2r)^3-1 |"
-          " bytes/rank avg (max) | CPU s/eval (sum) | wall s/eval | load avg |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+          " bytes/rank avg (max) | CPU s/eval (sum) | wall s/eval |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for r in sorted(rows, key=lambda r: (r["N"], r["ranks"], r["threads"])):
         own = r["own_max"]
         print(f"| {r['N']:.0e} | {r['ranks']} | {r['threads']} | {r['top_level']} | {own:.0f} | "
               f"{r['ghosts_avg']:.0f} ({r['ghosts_max']:.0f}) | {r['ghosts_avg'] / max(own, 1):.2f} | "
               f"{halo_model(r['ranks'], r['top_level']) if r['ranks'] > 1 else 0:.2f} | "
-              f"{r['bytes_avg']:.3g} ({r['bytes_max']:.3g}) | {r['cpu_sum']:.3g} | {r['wall']:.3g} | "
-              f"{r.get('loadavg', -1):.1f} |")
+              f"{r['bytes_avg']:.3g} ({r['bytes_max']:.3g}) | {r['cpu_sum']:.3g} | {r['wall']:.3g} |")
     print()
     print(f"c1 = {c1:.3e} CPU s per point and evaluation (N = {nbig:.0e}, 1 rank, 1 thread)")
     print(f"kappa = {kappa:.3f} (extra CPU of a ghost point relative to an own point; {len(fits)} runs)")
     print(f"assumed network: latency {ALPHA:.0e} s, bandwidth {BETA:.1e} B/s per rank")
     print()
     # measured: locally essential trees against whole frontier cells (run_scaling.sh with
-    # KIFMM_SCALING_ONLY=let: the same points and top levels, a build of each version)
+    # KIFMM_SCALING_ONLY=let: the same points and top levels, a build of each scheme)
     let_tags = sorted({r["tag"] for r in rows if r.get("tag", "").startswith("let-")})
     if let_tags:
         tag = let_tags[-1]
@@ -119,17 +119,15 @@ def main():
             k = seen.get((r["N"], r["ranks"]), 0)
             seen[(r["N"], r["ranks"])] = k + 1
             pairs.append((("2", "3", "auto")[k] if k < 3 else "?", r, b))
-        print(f"# measured: locally essential trees ({tag}) against whole frontier cells "
-              f"({pairs[0][2]['tag'] if pairs else '-'})")
+        print("# measured: locally essential trees against whole frontier cells")
         print("| N | P | top level (L) | own/rank | ghosts/rank avg (max): whole / LET | bytes/rank avg (max): whole / LET |"
-              " of which LET (max) | LET cells/rank | CPU s/eval (sum): whole / LET | load avg |")
-        print("|---|---|---|---|---|---|---|---|---|---|")
+              " of which LET (max) | LET cells/rank | CPU s/eval (sum): whole / LET |")
+        print("|---|---|---|---|---|---|---|---|---|")
         for req, r, b in sorted(pairs, key=lambda x: (x[1]["N"], x[1]["ranks"], x[0])):
             print(f"| {r['N']:.0e} | {r['ranks']} | {req} ({r['top_level']}) | {r['own_max']:.0f} | "
                   f"{b['ghosts_avg']:.0f} ({b['ghosts_max']:.0f}) / {r['ghosts_avg']:.0f} ({r['ghosts_max']:.0f}) | "
                   f"{b['bytes_avg']:.3g} ({b['bytes_max']:.3g}) / {r['bytes_avg']:.3g} ({r['bytes_max']:.3g}) | "
-                  f"{r['let_bytes_max']:.3g} | {r['let_cells_avg']:.0f} | {b['cpu_sum']:.3g} / {r['cpu_sum']:.3g} | "
-                  f"{r.get('loadavg', -1):.1f} |")
+                  f"{r['let_bytes_max']:.3g} | {r['let_cells_avg']:.0f} | {b['cpu_sum']:.3g} / {r['cpu_sum']:.3g} |")
         print()
     # LET: bytes of the cells and densities sent with the LET points, per ghost point byte
     # (fitted to the runs with forced coarse frontier cells, where every ghost comes by LET)
@@ -139,7 +137,7 @@ def main():
     print(f"LET cells and densities: {let_f:.2f} bytes per byte of LET points ({len(let_rows)} runs)")
     print()
     print("# model: time per evaluation (s), order 6, uniform, cubic domains")
-    print("Whole cells: the frontier-cell halo of the version before the locally essential trees. "
+    print("Whole cells: the frontier-cell halo when whole frontier cells are imported. "
           "LET: aligned = LAMMPS's domains follow the frontier cells (power-of-two grids of a periodic "
           "box); not aligned = plus the shared frontier cells imported whole (upper bound).")
     print()

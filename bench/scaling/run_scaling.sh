@@ -6,8 +6,8 @@
 # ghost counts mean something there, not the times), also with periodic boundaries, and the
 # locally essential trees below coarse frontier cells (top level forced to 2 and 3: frontier
 # cells much larger than leaves; KIFMM_BASE_BUILD=dir also runs a build of another commit
-# there, e.g. the whole-cell import before the LET). Appends JSON lines to
-# bench/scaling/results/scaling.jsonl (one per run, with the load average).
+# there, for comparison). Appends JSON lines to bench/scaling/results/scaling.jsonl (one per
+# run, with the load average).
 set -e
 cd "$(dirname "$0")/../.."
 B=${1:-build}

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Soak run of issue #10: runs in.soak with lmp_kifmm and checks its invariants.
+"""Soak run: runs in.soak with lmp_kifmm and checks its invariants.
 
     python3 bench/soak/run_soak.py [--steps 100000] [--segments 10] [--lmp build/lmp_kifmm]
 

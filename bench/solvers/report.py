@@ -16,6 +16,7 @@ import math
 import os
 import re
 import sys
+import textwrap
 
 TARGETS = (1e-3, 1e-5, 1e-7)
 EXACT = ("direct", "coulcut")
@@ -26,19 +27,9 @@ LABELS = {"kifmm": "kifmm", "msm": "msm (pair coul/msm + kspace msm)",
           "ewald": "ewald", "pppm": "pppm"}
 
 
-# archived kifmm runs of earlier engines (results/kifmm-COMMIT.jsonl), newest first
-ARCHIVES = {
-    "kifmm-c4d85d4.jsonl": "the kifmm runs and setup table of the third CPU-time pass (engine "
-    "at c4d85d4: leaf size from the tree depth of least modelled cost for N uniform atoms, "
-    "choose_tree(order, n, periodic), before the choice from the actual atom positions and "
-    "the refitted cost model of commits 0a8321b/62e9c4c)",
-    "kifmm-923c304.jsonl": "the kifmm runs and setup table of the second CPU-time pass (engine "
-    "at 923c304: mutual near field, leaf size from the per-order calibration table, before the "
-    "tree depth chosen per N and boundary by the cost model, commits 0ca0f18/1e8e477)",
-    "kifmm-cbcfc98.jsonl": "the kifmm runs and setup table of the first CPU-time campaign "
-    "(engine at cbcfc98, before the mutual near field and later engine speedups; runs "
-    "labelled 2b87538+dirty: same src/ plus the timer)",
-}
+# archived kifmm runs of earlier engine commits (results/kifmm-COMMIT.jsonl), newest first;
+# any other kifmm-*.jsonl next to the results file is listed after these
+ARCHIVES = ("kifmm-c4d85d4.jsonl", "kifmm-923c304.jsonl", "kifmm-cbcfc98.jsonl")
 
 SKIPPED_WALL = []    # (case, n, spec) of runs without CPU times (left out: see load)
 
@@ -459,7 +450,7 @@ def ref_history_note(recs, results_path):
                        f"(stored {fmt_e(old.get('error'))})")
     if n_all:
         txt += (f" Of the {n_all} stored competitor settings re-measured on these references "
-                f"in the kifmm runs' session, {n_same} gave the stored error to all digits (the "
+                f"at the time of the kifmm runs, {n_same} gave the stored error to all digits (the "
                 f"exact sums: to round-off, below 1e-12)" +
                 (": " + "; ".join(dev) if dev else "") + ".")
     return txt
@@ -493,16 +484,16 @@ def settings_table(recs, results_path=None):
              f"| competitor runs (msm, ewald, pppm, direct, coulcut): source commit, measured | "
              f"{commits(comp)}, {dates(comp)}. Their code (LAMMPS's styles, kifmm::direct_sum, "
              "kifmm::periodic_direct_sum) and the `run` command of bench_solvers are the same "
-             "at these commits; `+dirty`: another engineer's uncommitted timer in the "
+             "at these commits; `+dirty`: the checkout had an uncommitted timer in the "
              "engine's fmm_core.h, which only kifmm runs use |",
              f"| source commit of the references (same data files and reference forces for "
              f"every solver) | {commits(refs)}. " + ref_history_note(recs, results_path) +
              " |",
-             "| earlier kifmm runs | " + "; ".join(
-                 f"bench/solvers/results/{fn}: {why}" for fn, why in ARCHIVES.items()) +
-             "; **not used in this report** except in the tables [kifmm on the current "
-             "engine versus the archived earlier runs]"
-             "(#kifmm-on-the-current-engine-versus-the-archived-earlier-runs) |",
+             "| earlier kifmm runs | " + ", ".join(
+                 f"bench/solvers/results/{fn} (engine at {fn[len('kifmm-'):-len('.jsonl')]})"
+                 for fn in (archives(results_path) if results_path else [])) +
+             ": **not used in this report** except in the tables [kifmm runs of earlier "
+             "engine commits](#kifmm-runs-of-earlier-engine-commits) |",
              f"| OMP_NUM_THREADS (kifmm engine, direct sum) | {', '.join(threads)} |",
              "| MPI ranks | 1 (LAMMPS styles msm, coul/msm, coul/cut are serial) |",
              f"| host CPUs (shared with other work) | {', '.join(cpus)} |",
@@ -588,7 +579,7 @@ def recheck_groups(recs, results_path):
 
 
 def recheck_summary(recs, results_path):
-    """One sentence per session of re-measurements: median and range of re-measured / stored
+    """One sentence per date and binary of re-measurements: median and range of re-measured / stored
     CPU time of the competitors' settings and of kifmm's."""
     out = []
     for (day, commit), groups in sorted(recheck_groups(recs, results_path).items(),
@@ -604,9 +595,9 @@ def recheck_summary(recs, results_path):
     return " ".join(out)
 
 
-def session_factor(recs, results_path, commit, group="competitors"):
+def retime_factor(recs, results_path, commit, group="competitors"):
     """(median, min, max, count) of re-measured / stored CPU time of the recheck records made
-    with the binary of `commit` (the session of that commit's kifmm runs), or None."""
+    with the binary of `commit` (at the time of that commit's kifmm runs), or None."""
     v = sorted(x for (_, c), g in recheck_groups(recs, results_path).items() if c == commit
                for x in g.get(group, []))
     return (median(v), v[0], v[-1], len(v)) if v else None
@@ -620,19 +611,19 @@ def kifmm_commit(recs):
     return max(count, key=count.get) if count else None
 
 
-def archive_session_note(recs, results_path, archive):
-    """How CPU times of the archived runs' session compare with this report's kifmm session:
-    the stored competitor settings re-measured in each (recheck-COMMIT.jsonl)."""
+def archive_timing_note(recs, results_path, archive):
+    """How CPU times at the time of the archived runs compare with those at the time of this
+    report's kifmm runs: the stored competitor settings re-measured at each (recheck-COMMIT.jsonl)."""
     commit = archive[len("kifmm-"):-len(".jsonl")]
-    fa = session_factor(recs, results_path, commit)
-    fn = session_factor(recs, results_path, kifmm_commit(recs))
+    fa = retime_factor(recs, results_path, commit)
+    fn = retime_factor(recs, results_path, kifmm_commit(recs))
     if not fa or not fn:
         return ""
-    return (f" Stored competitor settings re-measured at the end of the archived runs' session "
+    return (f" Stored competitor settings re-measured after the archived runs "
             f"(results/recheck-{commit}.jsonl) took a median {fa[0]:.2f}x their stored CPU "
-            f"time ({fa[3]} settings), in the session of this report's kifmm runs "
+            f"time ({fa[3]} settings), after this report's kifmm runs "
             f"{fn[0]:.2f}x ({fn[3]} settings): the same work took about {fn[0] / fa[0]:.2f}x "
-            "as much CPU time in this report's session, so a ratio new / old near that value "
+            "as much CPU time at the time of this report's runs, so a ratio new / old near that value "
             "means an unchanged speed of the engine.")
 
 
@@ -706,7 +697,7 @@ def runs_table(recs, case):
 
 def summary(recs, cases, rechecks=None):
     """One line per case at its largest N: kifmm's speed ratios at matched error (and, where
-    every run of a competitor there was re-measured in the kifmm runs' session, that ratio)."""
+    every run of a competitor there was re-measured at the time of the kifmm runs, that ratio)."""
     rechecks = rechecks or {}
     lines = []
     for case in cases:
@@ -745,10 +736,10 @@ def summary(recs, cases, rechecks=None):
                     items.append(f"{c} not run at this N yet")
                     continue
                 tc, fc = time_at(ok_runs(recs, case, n, c), e)
-                same = session_runs(recs, rechecks, case, n, c)
+                same = retimed_runs(recs, rechecks, case, n, c)
                 ts, fs = time_at(same, e) if same else (None, None)
                 items.append(fmt_ratio(ratio(tc, tk), "~" if "<=" in (fk, fc) else "") +
-                             f" vs {c}" + (f" (re-measured in the kifmm session: " +
+                             f" vs {c}" + (f" (re-measured with the kifmm runs: " +
                                            fmt_ratio(ratio(ts, tk), "~" if "<=" in (fk, fs)
                                                      else "") + ")" if ts else "")
                              if tc is not None else f"{c} n/r")
@@ -961,9 +952,8 @@ def setup_table(recs):
     cpu = all("c_setup" in r and "c_eval" in r for r in rs)
     lines = [f"Uniform cube of {rs[0]['natoms']} atoms; setup = first `run 0` (includes one "
              "evaluation with energy); overhead = setup - eval. " +
-             ("CPU times." if cpu else "**Wall times** (this table was measured before the "
-              "switch to CPU time, under the load of the shared cores; it is not used in any "
-              "ratio).") + "\n",
+             ("CPU times." if cpu else "**Wall times** (these setup records have no CPU times; "
+              "the table is not used in any ratio).") + "\n",
              "| order P | eval [s] | setup, no cache [s] | overhead, no cache [s] | "
              "setup, operators from the disk cache [s] | overhead, cached [s] | operators [MB] |",
              "|---|---|---|---|---|---|---|"]
@@ -1042,8 +1032,8 @@ def matched(recs, case, n, comp, e):
     return tk, tc, (fk == "<=" or fc in ("<=", "~"))
 
 
-def session_runs(recs, rechecks, case, n, solver):
-    """The ok runs of a solver at (case, N) with the CPU times re-measured in the session of
+def retimed_runs(recs, rechecks, case, n, solver):
+    """The ok runs of a solver at (case, N) with the CPU times re-measured at the time of
     the kifmm runs there (recheck records of the kifmm runs' commit, same error), or None if
     not every run of that solver was re-measured."""
     kc = {r.get("commit") for r in ok_runs(recs, case, n, "kifmm")}
@@ -1065,7 +1055,7 @@ def session_runs(recs, rechecks, case, n, solver):
 def losses(recs, cases, rechecks=None):
     """Where kifmm is slower than another solver at matched error (ratio < 1). rechecks:
     (case, n, spec) -> a recheck record; where every run of the competitor at that case and N
-    was re-measured in the kifmm runs' session, the ratio of that session is shown too."""
+    was re-measured at the time of the kifmm runs, the ratio at that time is shown too."""
     rechecks = rechecks or {}
     lines = []
     for case in cases:
@@ -1079,7 +1069,7 @@ def losses(recs, cases, rechecks=None):
             items = []
             for c in comps:
                 es = []
-                same = session_runs(recs, rechecks, case, n, c)
+                same = retimed_runs(recs, rechecks, case, n, c)
                 for e in TARGETS:
                     m = matched(recs, case, n, c, e)
                     if m and m[1] < m[0]:
@@ -1092,7 +1082,7 @@ def losses(recs, cases, rechecks=None):
                                 tc, _ = time_at(same, e)
                             if tc:
                                 q = m[0] / tc
-                                txt += (f"; re-measured in the kifmm runs' session: {fmt_t(tc)} s, "
+                                txt += (f"; re-measured with the kifmm runs: {fmt_t(tc)} s, "
                                         + (f"{q:.3g}x faster" if q >= 1 else
                                            f"kifmm {1 / q:.3g}x faster"))
                         es.append(txt + ")")
@@ -1220,9 +1210,9 @@ def high_order_note(recs):
 
 
 def scene_snapshot_note(recs, results_path):
-    """The trees of kifmm on the 1000-atom charges-box, and which snapshots were made again
-    (results/scene-snapshots-COMMIT.jsonl: the earlier snapshots' reference and competitor
-    runs, kept apart)."""
+    """The trees of kifmm on the 1000-atom charges-box, and which snapshots differ from those
+    of results/scene-snapshots-COMMIT.jsonl (references and competitor runs on snapshots of
+    an earlier version of the examples, kept apart)."""
     txt = ""
     cb = [r for r in ok_runs(recs, "scene_charges-box", solver="kifmm") if r.get("depth")
           is not None]
@@ -1244,8 +1234,8 @@ def scene_snapshot_note(recs, results_path):
                 if not any(r.get("kind") == "run" and r.get("case") == c and r.get("n") == n
                            and r.get("solver") != "kifmm" for r in recs)]
         if not miss:
-            return ", and every solver was run again on the new ones"
-        return (", and on the new ones kifmm was run but not yet the competitors: " +
+            return "; every solver ran on the current ones"
+        return ("; on the current ones only kifmm ran: " +
                 ", ".join(miss) + " (see [Pending](#pending))")
     for fn in sorted(files, key=lambda f: newest[f], reverse=True):
         old = [r for r in side_records(results_path, re.escape(fn))
@@ -1263,21 +1253,20 @@ def scene_snapshot_note(recs, results_path):
                 diff.append((o, rel))
         rels = sorted(x for _, x in diff if x is not None)
         commit = fn[len("scene-snapshots-"):-len(".jsonl")]
-        txt += (f"The snapshots of results/{fn} (commit {commit}) were replaced by snapshots "
-                f"made again from the examples: " +
+        txt += (f"results/{fn} (commit {commit}) holds references and competitor runs on "
+                f"snapshots of an earlier version of the examples; of its snapshots " +
                 ", ".join(f"{o['case']} {o['n']}" + ("" if x is not None else
                                                       f" ({o['natoms']} atoms, now "
                                                       f"{refs[(o['case'], o['n'])]['natoms']})")
                           for o, x in diff) +
                 (f" (relative change of the RMS reference force {rels[0]:.1e} - "
                  f"{rels[-1]:.1e})" if rels else "") +
-                " are other atoms; the competitors' runs on the earlier snapshots are kept "
-                "apart in that file" + rerun_note([(o["case"], o["n"]) for o, _ in diff]) +
+                " are other atoms than the current ones, and its runs are not used in this "
+                "report" + rerun_note([(o["case"], o["n"]) for o, _ in diff]) +
                 ". ")
     if files:
-        txt += ("The end states change whenever the engine changes (the scenes run with kifmm, "
-                "whose forces differ within the requested accuracy from one tree to another). "
-                "The archived competitor runs are not used in this report. ")
+        txt += ("The end states depend on the engine (the scenes run with kifmm, whose forces "
+                "differ within the requested accuracy from one tree to another). ")
     sc = sorted({str(r.get("commit")) for (c, _), r in refs.items() if c.startswith("scene_")})
     if sc:
         txt += ("The current snapshots and their references were made at commit " +
@@ -1285,57 +1274,56 @@ def scene_snapshot_note(recs, results_path):
     return txt
 
 
-def session_paragraph(recs, results_path):
-    """The summary's paragraph on the sessions: when the kifmm runs, the references and the
-    competitor runs were measured, and the CPU-time factor between the sessions."""
+def timing_paragraph(recs, results_path):
+    """The summary's paragraph on when the kifmm runs, the references and the competitor runs
+    were measured, and the CPU-time factor between those times."""
     kc = kifmm_commit(recs)
-    fn = session_factor(recs, results_path, kc)
-    fk = session_factor(recs, results_path, kc, "kifmm")
+    fn = retime_factor(recs, results_path, kc)
+    fk = retime_factor(recs, results_path, kc, "kifmm")
     refs = [r for r in recs if r.get("kind") == "reference"]
     comp = [r for r in ok_runs(recs) if r["solver"] != "kifmm"]
     same = sorted({r["case"] for r in comp if r.get("commit") == kc})
     others = sorted({str(r.get("commit")) for r in comp if r.get("commit") != kc})
     if not others:
-        return (f"All runs of these results are from one campaign (commit {kc}): the ratios "
-                "compare CPU times measured in one session.\n")
+        return (f"All runs of these results were measured together (commit {kc}): the ratios "
+                "compare CPU times measured at the same time.\n")
     subj = [f"The kifmm runs (engine at {kc})"]
     if refs and all(r.get("commit") == kc for r in refs):
         subj.append("the exact references")
     if same:
         subj.append("the competitors' runs on " + ", ".join(same))
     txt = (", ".join(subj[:-1]) + " and " + subj[-1] if len(subj) > 1 else subj[0]) + (
-        " are from a later session of the machine than the other competitor runs (commits "
-        + ", ".join(others) + "). ")
+        " were measured after the other competitor runs (commits " + ", ".join(others) + "). ")
     if fn:
-        txt += (f"Re-measured in that session, the stored competitors' settings took a median "
-                f"{fn[0]:.2f}x their stored CPU time ({fn[1]:.2f} - {fn[2]:.2f}, {fn[3]} "
-                "settings)" + (f", kifmm's own runs {fk[0]:.2f}x ({fk[1]:.2f} - {fk[2]:.2f})"
-                               if fk else "") +
+        txt += (f"Measured again at the time of the kifmm runs, the stored competitors' "
+                f"settings took a median {fn[0]:.2f}x their stored CPU time ({fn[1]:.2f} - "
+                f"{fn[2]:.2f}, {fn[3]} settings)" +
+                (f", kifmm's own runs {fk[0]:.2f}x ({fk[1]:.2f} - {fk[2]:.2f})" if fk else "") +
                 " (table under [Settings of this run](#settings-of-this-run)). ")
         if abs(fn[0] - 1) >= 0.05:
             txt += ("The ratios against stored competitor runs therefore " +
                     ("understate" if fn[0] > 1 else "overstate") +
                     " kifmm's advantage by about that factor; ")
         else:
-            txt += "CPU times of the two sessions agree to within 5 % in the median; "
-        txt += ("where every run of a competitor at that N was re-measured in kifmm's session, "
-                "that ratio is given in parentheses. ")
+            txt += "CPU times measured at the two times agree to within 5 % in the median; "
+        txt += ("where every run of a competitor at that N was measured again, that ratio is "
+                "given in parentheses. ")
     else:
-        txt += ("No stored competitor setting was re-measured in the kifmm runs' session: "
-                "the ratios compare CPU times of different sessions (earlier re-measurements: "
-                "table under [Settings of this run](#settings-of-this-run)). ")
+        txt += ("No stored competitor setting was measured again at the time of the kifmm "
+                "runs: the ratios compare CPU times measured at different times (other "
+                "re-measurements: table under [Settings of this run](#settings-of-this-run)). ")
     big = [r for r in refs if r.get("c_direct_sum") and 0 < r.get("sampled", 0) < r["natoms"]]
     if big:
         rc = sorted({str(r.get("commit")) for r in big})
         txt += ("The direct sums of the 1e6 rows (`(s)`) were timed on the sample when the "
-                "references were remade" + (", in kifmm's session." if rc == [kc] else
-                                            f" (commit {', '.join(rc)}).") )
+                "references were made" + (", with the kifmm runs." if rc == [kc] else
+                                          f" (commit {', '.join(rc)}).") )
     return txt + "\n"
 
 
 def small_n_note(recs, results_path, rechecks):
     """N ~ 1e3 (at most 2500 atoms): the depths of kifmm's trees, kifmm's time against the
-    direct sum re-measured in the same session, and against the newest archived engine."""
+    direct sum re-measured at the same time, and against the newest archived engine."""
     kc = kifmm_commit(recs)
     small = [r for r in ok_runs(recs, solver="kifmm")
              if r["natoms"] <= 2500 and r.get("depth") is not None]
@@ -1365,7 +1353,7 @@ def small_n_note(recs, results_path, rechecks):
            "positions at the first evaluation (kifmm::choose_tree) have " + "; ".join(parts) +
            "; with open boundaries depth 0 or 1 is all near field (a direct sum in one or 8 "
            "leaves, exact to round-off). ")
-    # kifmm against kifmm::direct_sum re-measured in the kifmm runs' session
+    # kifmm against kifmm::direct_sum re-measured at the time of the kifmm runs
     q = []
     for (case, n, spec), x in sorted(rechecks.items(), key=str):
         if spec != "direct" or x.get("commit") != kc:
@@ -1377,8 +1365,8 @@ def small_n_note(recs, results_path, rechecks):
         if tk:
             q.append((tk / x["c_eval"], f"{case} {nlabel(n, ks[0]['natoms'])}"))
     if q:
-        txt += ("kifmm's CPU time at 1e-7 over that of kifmm::direct_sum re-measured in the same "
-                "session: " + ", ".join(f"{lab} {v:.2f}" for v, lab in q) + ". ")
+        txt += ("kifmm's CPU time at 1e-7 over that of kifmm::direct_sum re-measured with the "
+                "kifmm runs: " + ", ".join(f"{lab} {v:.2f}" for v, lab in q) + ". ")
     arch = archives(results_path)
     if arch:
         old = archived_runs(results_path, arch[0])
@@ -1389,12 +1377,13 @@ def small_n_note(recs, results_path, rechecks):
             txt += (f"Against the archived runs of {arch[0][len('kifmm-'):-len('.jsonl')]} on "
                     f"the same atoms there, CPU eval new / old is a median {median(v):.2f} "
                     f"({v[0]:.2f} - {v[-1]:.2f}, {len(v)} settings; [comparison with the "
-                    "archived runs](#kifmm-on-the-current-engine-versus-the-archived-earlier-"
-                    "runs)).")
+                    "archived runs](#kifmm-runs-of-earlier-engine-commits)).")
     return txt
 
 
-def write_doc(recs, doc, plots, profile, cases_path, results_path):
+def write_doc(recs, doc, plots, profile, cases_path, results_path, page=None):
+    """The full tables (every run, settings, references, setup, provenance) into doc; page:
+    the user page that summarizes them, if one is written."""
     d = os.path.dirname(os.path.abspath(doc))
     rel = {k: os.path.relpath(v, d) for k, v in plots.items()}
     cases = cases_of(recs)
@@ -1403,32 +1392,35 @@ def write_doc(recs, doc, plots, profile, cases_path, results_path):
     hard_cases = [c for c in cases if c not in main_cases]
     out = []
     w = out.append
-    w("# Speed versus error: kspace kifmm, LAMMPS msm, ewald, pppm and direct summation\n")
-    w("<!-- generated by bench/solvers/report.py from bench/solvers/results/results.jsonl; "
+    w("# Speed versus error, full tables: kspace kifmm, LAMMPS msm, ewald, pppm and direct "
+      "summation\n")
+    w("<!-- generated by bench/solvers/report.py from bench/solvers/results/*.jsonl; "
       "edit report.py, not this file -->\n")
-    w(f"Profile `{profile}`. Reproduce with one command (hours on one core; resumable, runs "
-      "already in the results file are kept):\n")
-    w("```sh\nbash bench/solvers/run.sh            # full: bench/solvers/results/ + this file\n"
+    w(f"Profile `{profile}`." + (f" Summary: [{os.path.relpath(page, d)}]"
+                                 f"({os.path.relpath(page, d)})." if page else "") +
+      " Reproduce with one command (hours on one core; resumable, runs already in the "
+      "results file are kept):\n")
+    w("```sh\nbash bench/solvers/run.sh            # full: bench/solvers/results/ + doc/benchmarks.md\n"
       "bash bench/solvers/run.sh --quick    # N <= 1e4, minutes, report in the build directory\n"
       "bash bench/solvers/run.sh --report-only   # tables and plots from the stored results\n"
       "bash bench/solvers/run.sh --solvers kifmm # kifmm only (new engine; see run.sh)\n```\n")
     w("## Summary: kifmm's speed ratio at matched error (largest N of each case)\n")
     w("How many times faster kifmm is than the best setting of each LAMMPS solver (msm for "
       "open boundaries; ewald and pppm for periodic ones) and than the exact direct sum, for "
-      "the same measured relative force error (ratios of times measured in the same "
-      "campaign; below 1x kifmm is slower; `~`: one of the times is a bound or an N^2 "
-      "extrapolation, see below; `msm n/r`: no run of that solver reached that error). Full "
-      "tables: [speed ratio at matched error](#speed-ratio-at-matched-error).\n")
-    w(session_paragraph(recs, results_path))
+      "the same measured relative force error (below 1x kifmm is slower; `~`: one of the "
+      "times is a bound or an N^2 extrapolation, see below; `msm n/r`: no run of that solver "
+      "reached that error). Full tables: [speed ratio at matched error]"
+      "(#speed-ratio-at-matched-error).\n")
+    w(timing_paragraph(recs, results_path))
     w(summary(recs, cases_of(recs), recheck_map(results_path)))
     w("\n## Where kifmm is slower\n")
-    fn = session_factor(recs, results_path, kifmm_commit(recs))
+    fn = retime_factor(recs, results_path, kifmm_commit(recs))
     w("Every case, N and matched error where another solver needs less CPU time than kifmm "
       "for the same measured error (`~`: one time is a bound or an extrapolation), and where "
-      "the competitor's runs were re-measured in the session of the kifmm runs, the ratio of "
-      "that session" + ((" (the stored competitor runs are from an earlier session whose CPU "
-                         "times were " + ("shorter" if fn[0] > 1 else "longer") + ", see "
-                         "[Settings of this run](#settings-of-this-run))") if fn else "") +
+      "the competitor's runs were measured again at the time of the kifmm runs, the ratio "
+      "then" + ((" (the stored competitor runs took " + ("less" if fn[0] > 1 else "more") +
+                 " CPU time than when measured again, see [Settings of this run]"
+                 "(#settings-of-this-run))") if fn else "") +
       ". " + small_n_note(recs, results_path, recheck_map(results_path)) + "\n")
     w(losses(recs, cases_of(recs), recheck_map(results_path)))
     w("## What is measured\n")
@@ -1436,9 +1428,9 @@ def write_doc(recs, doc, plots, profile, cases_path, results_path):
 unit charges, dielectric 1, `boundary f f f`) and are compared with the same exact
 reference (the same data and reference files for every solver), measured by the driver
 (`bench/solvers/run_bench.py` calling `bench_solvers`, one child process per solver run).
-kifmm's runs were measured again on the current engine after the competitors' (commits
-and dates in [Settings of this run](#settings-of-this-run)); the times are CPU times, which
-stay comparable between runs made hours apart on the shared machine:
+kifmm's runs and the competitors' were measured at different times (commits and dates in
+[Settings of this run](#settings-of-this-run)); the times are CPU times, which stay
+comparable between runs made hours apart:
 
 * **error**: the relative RMS error of the **total** force on the atoms,
   `||F - F_exact|| / ||F_exact||` (sums over atoms and components). For msm the total force
@@ -1452,13 +1444,13 @@ stay comparable between runs made hours apart on the shared machine:
   `kspace->compute(0,0)` called directly (forces only, no energy/virial, no neighbor list
   rebuild: atoms do not move), **median** of at least 3 evaluations and at least 1 s. The
   time is the **CPU time of the process** (`CLOCK_PROCESS_CPUTIME_ID`; every solver runs on
-  one thread, so this is the core time the evaluation needs): the two cores are shared with
+  one thread, so this is the core time the evaluation needs): the host's cores also ran
   other work (load average below), which inflates wall times by factors up to ~5 depending
   on the moment, while CPU times stay comparable between runs made minutes or hours apart.
   The wall times (MPI_Wtime) are in results.jsonl as `t_eval` (`c_eval` is the CPU time).
-  `pair / kspace` splits the CPU time. A first campaign that recorded wall times only is
-  kept in bench/solvers/results/wall-clock-v1.jsonl; **none of its times is used in this
-  report** (no ratio mixes wall-clock and CPU times).
+  `pair / kspace` splits the CPU time. bench/solvers/results/wall-clock-v1.jsonl holds runs
+  with wall times only; **none of its times is used in this report** (no ratio mixes
+  wall-clock and CPU times).
 * **setup**: CPU time (the wall time is in results.jsonl as `t_setup`) of the first
   `run 0 post no` (init, neighbor lists, grid or operator setup and the first evaluation
   including energy). kifmm reads its translation operators
@@ -1492,14 +1484,12 @@ stay comparable between runs made hours apart on the shared machine:
   161x and 173x measured from 1e4 to 1e5; the setup and 3 more evaluations) exceeds the
   per-run limit of 600 s CPU is recorded as skipped, not run; a run is stopped at 600 s CPU
   (or 2400 s wall) and recorded as timeout (other limits: `cpu_limit_s` in results.jsonl,
-  listed below). Runs judged before that predictor (N^2 for ewald, the setup's own
-  evaluation not counted) keep their judgement. The first runs of the campaign (uniform,
-  plummer up to N = 1e5, uniform_periodic, plummer_periodic) predicted from wall times at
-  any smaller N with N^1.5 for ewald; settings they skipped are judged again by a later
-  pass of the driver (`skipped` rows that remain are the final judgement). At N >= 5e5
+  listed below). Some `skipped` records were judged with a simpler predictor (N^2, or
+  N^1.5 from wall times, for ewald); the driver judges skipped settings again, so the
+  `skipped` rows that remain are its final judgement. At N >= 5e5
   (the 1e6 runs; limits.large_n) the campaign runs kifmm at acc 1e-2, 1e-3, 1e-5, 1e-7
   only (enough to bracket the matched errors; the explicit orders are shown up to 1e5) and
-  stops or skips any run above 300 s CPU: campaign time on the shared machine. When every
+  stops or skips any run above 300 s CPU, to bound the campaign's time. When every
   kept setting of a competitor fails at some N (memory, in the clustered cases at 1e5),
   its other settings are not tried at that N; at the next N all its settings are tried
   again (those that failed at a smaller N are skipped).
@@ -1513,13 +1503,14 @@ stay comparable between runs made hours apart on the shared machine:
   ewald at 1e-12 agrees with the exact sum only to 7.7e-8 (measured on 4000 uniform atoms),
   which is also the floor of ewald and pppm in these tables. The exact solver of the periodic
   cases (`direct`) is that Ewald sum itself (O(N^2) real space), up to N = 5000.
-* Timings are noisy (shared machine, see the load average below): the report compares
-  solvers through **ratios of times measured in the same campaign**, never across machines.
+* Timings are noisy (other work on the host, see the load average below): the report
+  compares solvers through **ratios of times measured in the same campaign**, never across
+  machines.
 """)
     lim = limit_runs(recs)
     if lim:
-        w("Runs with a per-run CPU limit other than the profile's (`run_bench.py --timeout`; "
-          "the pending periodic competitor runs at N = 1e5, measured later): " + lim + "\n")
+        w("Runs with a per-run CPU limit other than the profile's (`run_bench.py --timeout`): "
+          + lim + "\n")
     w("## Settings of this run\n")
     w(settings_table(recs, results_path))
     rt = recheck_table(recs, results_path)
@@ -1604,19 +1595,19 @@ cases `direct` is the exact Ewald sum, run at N <= 5000 only.
     ects = [(fn, engine_change_table(recs, results_path, fn)) for fn in archives(results_path)]
     ects = [(fn, t) for fn, t in ects if t]
     if ects:
-        w("\n### kifmm on the current engine versus the archived earlier runs\n")
+        w("\n### kifmm runs of earlier engine commits\n")
         w("The same kifmm settings on the same atoms and reference, measured on the engine of "
           "this report and on an earlier engine whose runs are archived (not used anywhere "
           "else in this report): ratio of the CPU times per evaluation (below 1: the current "
           "engine is faster) and of the measured errors (the calibration table and tree "
           "choice are the engine's own at each commit). The archived times were measured "
-          "in other sessions; the re-measured settings above show how far CPU times measured "
+          "at other times; the re-measured settings above show how far CPU times measured "
           "at different times agree.\n")
         for fn, t in ects:
-            why = ARCHIVES.get(fn, "")
             dcs = depth_change_summary(recs, results_path, fn)
-            w(f"\nAgainst bench/solvers/results/{fn}" + (f" ({why})" if why else "") + "." +
-              archive_session_note(recs, results_path, fn) + (" " + dcs if dcs else "") +
+            w(f"\nAgainst bench/solvers/results/{fn} (engine at "
+              f"{fn[len('kifmm-'):-len('.jsonl')]})." +
+              archive_timing_note(recs, results_path, fn) + (" " + dcs if dcs else "") +
               "\n\n")
             w(t)
     w("\n## Pareto fronts (error versus time) per configuration\n")
@@ -1645,7 +1636,7 @@ cases `direct` is the exact Ewald sum, run at N <= 5000 only.
     pend = pending_list(cases_path, profile)
     w("""* **Full-size scene snapshots**: the scene cases use the quick variants of the examples
   (1000 to 6000 atoms); the full-size scenes (10^4 to 10^5 atoms, 10^5 steps) take hours
-  each on this machine. `"full": true` in a `scene_*` case of bench/solvers/cases.json makes
+  each. `"full": true` in a `scene_*` case of bench/solvers/cases.json makes
   scene_snapshots.py run the full variant (delete the case's snapshots in the work directory
   first). The generated cases (`collapse`, `platelets`, `dipole3`) cover those sizes.
 """)
@@ -1655,11 +1646,280 @@ cases `direct` is the exact Ewald sum, run at N <= 5000 only.
         f.write("\n".join(x.rstrip("\n") + "\n" for x in out).replace("\n\n\n", "\n\n"))
 
 
+# ----------------------------------------------------------------------------- user page
+
+CASE_WORDS = {
+    "uniform": "uniform random in the unit cube, charges +-1",
+    "plummer": "Plummer sphere (scale radius 0.05), charges +-1",
+    "clusters": "two dense balls (radius 0.02) near opposite corners",
+    "dipole3": "rigid 3-pebble dipole clumps (charges -1, 0, +1; clump net-force error too)",
+    "collapse": "Plummer sphere of scale radius 0.005 (a collapsed cloud)",
+    "platelets": "platelets of 1094 pebbles in two oppositely charged layers",
+    "uniform_periodic": "as uniform, periodic unit cell",
+    "plummer_periodic": "as plummer, periodic unit cell",
+    "dipole3_periodic": "as dipole3, periodic unit cell",
+}
+# the plots of the user page, in this order (those that exist)
+PAGE_PLOTS = (("time_vs_n", "CPU time per evaluation against N at matched error (kifmm, the "
+               "LAMMPS solvers and the direct sum; hollow markers: upper bounds)"),
+              ("pareto_uniform_periodic", "error against CPU time of every run (lines: Pareto "
+               "fronts), uniform charges with periodic boundaries: kifmm, ewald, pppm"),
+              ("pareto_platelets", "error against CPU time of every run, charged platelets "
+               "(filled: atom forces, hollow: net forces of the platelets; dashed: direct sums)"),
+              ("error_vs_order", "kifmm's error against its order P, each case at its largest N "
+               "with explicit orders"))
+
+
+def fmt_pow(n):
+    """1e3-style label of an atom count (its power of ten, rounded)."""
+    return f"1e{round(math.log10(n))}" if n > 0 else "0"
+
+
+def failed_reason(recs, case, n, c):
+    """'all K settings failed (reasons)' when every run of solver c at (case, n) failed."""
+    rs = [r for r in recs if r.get("kind") == "run" and r["case"] == case and r["n"] == n
+          and r.get("solver") == c]
+    if not rs or any(r["status"] == "ok" for r in rs):
+        return None
+    why = set()
+    for r in rs:
+        m = re.search(r"ERROR(?: on proc \d+)?: ([^,(]*)", r.get("message", ""))
+        why.add(m.group(1).strip() if m else (
+            f"skipped: {r.get('message', '')}" if r["status"] == "skipped" else r["status"]))
+    return f"all {len(rs)} settings failed ({'; '.join(sorted(why))})"
+
+
+def best_lammps(recs, case, n, e):
+    """(ratio, solver, approximate) of the LAMMPS solver that is fastest at error e, or None
+    when none reached e (or kifmm did not)."""
+    best = None
+    for c in COMPETITORS:
+        m = matched(recs, case, n, c, e) if ok_runs(recs, case, n, c) else None
+        if m and (best is None or m[1] / m[0] < best[0]):
+            best = (m[1] / m[0], c, m[2])
+    return best
+
+
+def summary_table(recs, cases):
+    """The page's table: one row per case at its largest N, kifmm's speed ratio at matched
+    error against the direct sum and against the fastest LAMMPS solver (at the largest N
+    where one ran), and notes on the LAMMPS solvers that failed or did not run."""
+    hdr = ("| case | boundary | N | kifmm CPU s at 1e-05 | direct / kifmm: 1e-03 | 1e-05 | 1e-07 "
+           "| LAMMPS solver / kifmm: 1e-03 | 1e-05 | 1e-07 | N of the LAMMPS comparison |")
+    lines = [hdr, "|---|---|---|---|---|---|---|---|---|---|---|"]
+    notes = []
+    for case in cases:
+        ns = [n for n in ns_of(recs, case) if ok_runs(recs, case, n, "kifmm")]
+        if not ns:
+            continue
+        n = ns[-1]
+        natoms = ok_runs(recs, case, n)[0]["natoms"]
+        ref = ref_of(recs, case, n)
+        samp = "*" if ref and ref["sampled"] < ref["natoms"] else ""
+        tk, fk = time_at(ok_runs(recs, case, n, "kifmm"), 1e-5)
+        row = (f"| {case} | {'periodic' if is_periodic(recs, case) else 'open'} | "
+               f"{nlabel(n, natoms)}{samp} | {fmt_t(tk, fk)} |")
+        td, fd = direct_time(recs, case, n)
+        for e in TARGETS:
+            tk, fk = time_at(ok_runs(recs, case, n, "kifmm"), e)
+            if td is None or tk is None:
+                row += " - |" if td is None else " n/r |"
+                continue
+            row += " " + fmt_ratio(ratio(td, tk), "~" if (fd == "~" or fk == "<=") else
+                                   ("s" if fd == "s" else "")) + " |"
+        ran = [c for c in COMPETITORS if any(r.get("kind") == "run" and r["case"] == case
+                                             and r.get("solver") == c for r in recs)]
+        nl = [m for m in ns if any(ok_runs(recs, case, m, c) for c in ran)]
+        if nl:
+            m = nl[-1]
+            for e in TARGETS:
+                b = best_lammps(recs, case, m, e)
+                row += (f" {fmt_ratio(b[0], '~' if b[2] else '')} {b[1]} |" if b else " n/r |")
+            row += f" {nlabel(m, ok_runs(recs, case, m)[0]['natoms'])} |"
+        else:
+            row += " - | - | - | - |"
+        lines.append(row)
+        mine = []
+        for c in ran:
+            why = failed_reason(recs, case, n, c)
+            if why:
+                mine.append(f"{c} at N = {nlabel(n, natoms)}: {why}")
+            elif not any(r.get("kind") == "run" and r["case"] == case and r["n"] == n
+                         and r.get("solver") == c for r in recs):
+                mine.append(f"{c} not run at N = {nlabel(n, natoms)}")
+            if nl and ok_runs(recs, case, nl[-1], c):
+                continue
+            for m in [x for x in ns if x != n]:
+                why = failed_reason(recs, case, m, c)
+                if why:
+                    mine.append(f"{c} at N = {nlabel(m, ok_runs(recs, case, m)[0]['natoms'])}: "
+                                f"{why}")
+        if mine:
+            notes.append(f"{case}: " + "; ".join(mine))
+    return "\n".join(lines) + "\n", notes
+
+
+def loss_list(recs, cases, rechecks):
+    """Where another solver needs less CPU time than kifmm at matched error: one line per
+    case, solver and N."""
+    lines = []
+    for case in cases:
+        for n in ns_of(recs, case):
+            runs = ok_runs(recs, case, n)
+            if not runs:
+                continue
+            for c in list(COMPETITORS) + ["direct"]:
+                got = []
+                for e in TARGETS:
+                    m = matched(recs, case, n, c, e)
+                    if m and m[1] < m[0]:
+                        got.append((e, m[0] / m[1], m[2], m[0]))
+                if not got:
+                    continue
+                who = "the direct sum" if c == "direct" else c
+                facs = {f"{'~' if g[2] else ''}{g[1]:.2f}x" for g in got}
+                if len(facs) == 1:
+                    txt = (f"{who} is {facs.pop()} faster at " +
+                           ", ".join(f"{g[0]:.0e}" for g in got))
+                else:
+                    txt = f"{who} is faster: " + ", ".join(
+                        f"{'~' if g[2] else ''}{g[1]:.2f}x at {g[0]:.0e}" for g in got)
+                same = retimed_runs(recs, rechecks, case, n, c)
+                if same:
+                    e, tk = got[0][0], got[0][3]
+                    tc = (min(r["t_eval"] for r in same) if c == "direct"
+                          else time_at(same, e)[0])
+                    if tc:
+                        q = tk / tc
+                        txt += (f" (measured again at the time of the kifmm runs: " +
+                                (f"{q:.2f}x faster)" if q >= 1 else f"kifmm {1 / q:.2f}x faster)"))
+                lines.append(f"* {case}{' (periodic)' if is_periodic(recs, case) else ''}, "
+                             f"N = {nlabel(n, runs[0]['natoms'])}: {txt}.")
+    return ("\n".join(lines) + "\n") if lines else "(none in these results)\n"
+
+
+def small_n_depths(recs):
+    """(open settings at N <= 2500, of which a tree of depth <= 1) for kifmm's runs."""
+    rs = [r for r in ok_runs(recs, solver="kifmm") if r["natoms"] <= 2500
+          and not r.get("periodic") and r.get("depth") is not None]
+    return len(rs), sum(1 for r in rs if r["depth"] <= 1)
+
+
+def wrap_md(text, width=96):
+    """Markdown with its long prose lines and list items wrapped (tables, code blocks,
+    headings, images and comments are left as they are)."""
+    out, code = [], False
+    for line in text.split("\n"):
+        if line.startswith("```"):
+            code = not code
+        if code or line.startswith(("```", "|", "#", "![", "<!--")) or len(line) <= width:
+            out.append(line)
+        elif line.startswith("* "):
+            out.append(textwrap.fill(line, width, subsequent_indent="  ",
+                                     break_on_hyphens=False, break_long_words=False))
+        else:
+            out.append(textwrap.fill(line, width, break_on_hyphens=False,
+                                     break_long_words=False))
+    return "\n".join(out)
+
+
+def write_page(recs, doc, plots, profile, results_path, full_path):
+    """The user page: what was compared and how, one summary table, a few plots, where kifmm
+    is slower, how to reproduce; the full tables are in full_path."""
+    d = os.path.dirname(os.path.abspath(doc))
+    rel = {k: os.path.relpath(v, d) for k, v in plots.items()}
+    full_rel = os.path.relpath(full_path, d)
+    cases = cases_of(recs)
+    main_cases = [c for c in cases if not any(r.get("hard") and r["case"] == c
+                                              for r in recs if r.get("kind") == "run")]
+    cases = main_cases + [c for c in cases if c not in main_cases]
+    rechecks = recheck_map(results_path)
+    nmax = max((r["natoms"] for r in ok_runs(recs)), default=0)
+    nmin = min((r["natoms"] for r in ok_runs(recs)), default=0)
+    out = []
+    w = out.append
+    w("# Speed versus error: kspace kifmm against the direct sum and LAMMPS's msm, ewald, "
+      "pppm\n")
+    w("<!-- generated by bench/solvers/report.py from bench/solvers/results/*.jsonl; edit "
+      "report.py, not this file -->\n")
+    w("## What was compared, and how\n")
+    w("The long-range Coulomb forces on the same atoms (LAMMPS data files, `units lj`, "
+      "dielectric 1) computed by `kspace_style kifmm`, by LAMMPS's `msm` (open boundaries, with "
+      "`pair_style coul/msm`), `ewald` and `pppm` (periodic boundaries, with `pair_style "
+      "coul/long`), and by the exact direct sum. The configurations, at N from "
+      f"{fmt_pow(nmin)} to {fmt_pow(nmax)}:\n")
+    items = [f"* `{c}`: {CASE_WORDS[c]}" for c in cases if c in CASE_WORDS]
+    if any(c.startswith("scene_") for c in cases):
+        items.append("* `scene_*`: the start and end states of the four example scenes (quick "
+                     "variants; gravity-collapse with its masses as charges)")
+    w("\n".join(items) + "\n")
+    w("""
+Each solver runs at several settings (kifmm: accuracy 1e-2 to 1e-9 and explicit orders; msm,
+ewald, pppm: accuracy, pair cutoff and order), each on one thread in its own process. Per run:
+
+* **error**: relative RMS error of the total force on the atoms, `||F - F_exact|| /
+  ||F_exact||`, against the exact direct sum (periodic: an Ewald sum at double accuracy);
+  for the largest N (marked `*`) on a random sample of atoms;
+* **cost**: CPU time of one force evaluation after setup (median of at least 3).
+
+A solver's time at an error E is interpolated on its Pareto front (the runs that no other run
+of the same solver beats in both time and error), so each solver is taken at its best setting
+for that error. The **speed ratio** at E is the other solver's time divided by kifmm's: above
+1x kifmm is faster.
+""")
+    w("## Summary: speed ratio at matched error\n")
+    w("At each case's largest N. The LAMMPS column names the fastest of msm, ewald and pppm at "
+      "that error, at the largest N where one of them ran. `n/r`: no setting reached that "
+      "error; `-`: not run (periodic cases: the exact Ewald sum runs at small N only); `~`: "
+      "one of the two times is an upper bound or an N^2 extrapolation; `(s)`: the direct sum "
+      "timed on the sampled atoms and scaled by N / sample.\n")
+    tab, notes = summary_table(recs, cases)
+    w(tab)
+    if notes:
+        w("\nWhere a LAMMPS solver did not run or failed:\n\n" +
+          "\n".join(f"* {x}" for x in notes) + "\n")
+    fn = retime_factor(recs, results_path, kifmm_commit(recs))
+    if fn:
+        w(f"\nThe LAMMPS solvers' runs and kifmm's were measured at different times. "
+          f"{fn[3]} of the LAMMPS and direct-sum settings, measured again at the time of the "
+          f"kifmm runs, took {fn[1]:.2f} to {fn[2]:.2f} times (median {fn[0]:.2f}) their "
+          "stored CPU time: that is the uncertainty of a ratio.\n")
+    shown = [(k, cap) for k, cap in PAGE_PLOTS if k in rel]
+    if not shown:
+        shown = [(k, k) for k in sorted(rel)][:3]
+    if shown:
+        w("## Plots\n")
+        for k, cap in shown:
+            w(f"![{k}]({rel[k]})\n\n*{cap}.*\n")
+    w("## Where kifmm is slower\n")
+    w("Every case, N and error at which another solver needed less CPU time than kifmm:\n")
+    w(loss_list(recs, cases, rechecks))
+    tot, shallow = small_n_depths(recs)
+    if tot:
+        w(f"\nAt N <= 2500 with open boundaries kifmm's tree is a single leaf or 8 leaves in "
+          f"{shallow} of {tot} settings: the evaluation is then a direct sum itself, and its "
+          "time equals the direct sum's within the measurement spread.\n")
+    w("## Reproduce\n")
+    w("```sh\nbash bench/solvers/run.sh\n```\n")
+    w("builds `bench_solvers` and `lmp_kifmm` in `build/`, measures what "
+      "bench/solvers/results/results.jsonl does not hold yet (the full campaign takes hours on "
+      "one core; it is resumable), and writes this page, the plots and the full tables. "
+      "`--report-only` regenerates them from the stored results in seconds; `--quick` runs a "
+      "reduced campaign (N <= 1e4, minutes) into the build directory.\n")
+    w(f"All runs, settings, memory, setup costs, clump net-force errors, scaling exponents and "
+      f"the provenance of the measurements (commits, dates, host): [{full_rel}]({full_rel}).\n")
+    with open(doc, "w") as f:
+        f.write(wrap_md("\n".join(x.rstrip("\n") + "\n" for x in out)
+                        .replace("\n\n\n", "\n\n")))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--results", required=True)
     ap.add_argument("--plots", required=True, help="directory for the PNG files")
-    ap.add_argument("--doc", required=True, help="markdown report to write")
+    ap.add_argument("--doc", required=True, help="the summary page (markdown) to write")
+    ap.add_argument("--full", help="the full tables (markdown) to write; default: "
+                    "full_report.md next to the results file")
     ap.add_argument("--profile", default="full")
     ap.add_argument("--cases", default=os.path.join(os.path.dirname(os.path.abspath(__file__)),
                                                      "cases.json"))
@@ -1669,9 +1929,15 @@ def main():
     if not recs:
         print(f"report.py: no results in {args.results}", file=sys.stderr)
         return 1
+    full = args.full or os.path.join(os.path.dirname(os.path.abspath(args.results)),
+                                     "full_report.md")
     os.makedirs(args.plots, exist_ok=True)
     plots = {} if args.no_plots else make_plots(recs, args.plots, cases_of(recs), args.profile)
-    write_doc(recs, args.doc, plots, args.profile, args.cases, args.results)
+    if not plots:    # no matplotlib, or --no-plots: link the plots already in the directory
+        plots = {fn[:-4]: os.path.join(args.plots, fn) for fn in sorted(os.listdir(args.plots))
+                 if re.fullmatch(r"(pareto_.*|time_vs_n|error_vs_order)\.png", fn)}
+    write_doc(recs, full, plots, args.profile, args.cases, args.results, page=args.doc)
+    write_page(recs, args.doc, plots, args.profile, args.results, full)
     return 0
 
 

@@ -1,12 +1,17 @@
 #!/usr/bin/env bash
-# Speed-versus-error report of the long-range solvers (kspace kifmm, LAMMPS msm, direct sum):
-# builds bench_solvers, measures (run_bench.py, resumable), writes tables and plots (report.py).
+# Speed-versus-error report of the long-range solvers (kspace kifmm, LAMMPS msm, ewald, pppm,
+# direct sum): builds bench_solvers, measures (run_bench.py, resumable), writes the summary
+# page, the full tables and the plots (report.py).
 #
-#   bash bench/solvers/run.sh            full campaign (hours on 1 core): results in
-#                                        bench/solvers/results/, report in doc/benchmarks.md
-#   bash bench/solvers/run.sh --quick    N <= 1e4, few solvers (minutes): report in the build dir
+#   bash bench/solvers/run.sh            full campaign (hours on 1 core): results, plots and
+#                                        the full tables (full_report.md) in
+#                                        bench/solvers/results/, summary in doc/benchmarks.md
+#   bash bench/solvers/run.sh --quick    N <= 1e4, few solvers (minutes): into the build dir
 #   bash bench/solvers/run.sh --tiny     the smoke test's inputs (seconds)
-# Options: --out DIR (results + plots), --doc FILE (report), --build DIR, --bin PATH (no build),
+# With --quick and --tiny the output directory holds the full tables as benchmarks.md and the
+# summary as summary.md.
+# Options: --out DIR (results + plots), --doc FILE (summary page), --full FILE (full tables),
+#   --build DIR (default: build/ of this checkout, or $KIFMM_BUILD_DIR), --bin PATH (no build),
 #   --only CASE[,CASE], --max-n N, --force (rerun what the results file has), --report-only,
 #   --threads T (OMP_NUM_THREADS of the runs, default 1), --commit C (source commit of --bin,
 #   recorded in the results; default: this checkout's HEAD, "+dirty" if src/ has changes),
@@ -18,8 +23,8 @@ set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
 profile=full
-build="${KIFMM_BUILD_DIR:-/work/build-bench}"
-out="" doc="" bin="" only="" maxn="" force="" report_only=0 commit="" solvers="" timeout=""
+build="${KIFMM_BUILD_DIR:-$root/build}"
+out="" doc="" full="" bin="" only="" maxn="" force="" report_only=0 commit="" solvers="" timeout=""
 threads="${OMP_NUM_THREADS:-1}"
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -27,6 +32,7 @@ while [ $# -gt 0 ]; do
     --tiny) profile=tiny ;;
     --out) out="$2"; shift ;;
     --doc) doc="$2"; shift ;;
+    --full) full="$2"; shift ;;
     --build) build="$2"; shift ;;
     --bin) bin="$2"; shift ;;
     --only) only="$2"; shift ;;
@@ -44,9 +50,11 @@ done
 if [ "$profile" = full ]; then
   out="${out:-$here/results}"
   doc="${doc:-$root/doc/benchmarks.md}"
+  full="${full:-$out/full_report.md}"
 else
   out="${out:-$build/bench_solvers_$profile}"
-  doc="${doc:-$out/benchmarks.md}"
+  doc="${doc:-$out/summary.md}"
+  full="${full:-$out/benchmarks.md}"
 fi
 mkdir -p "$out"
 work="$out/work"
@@ -78,5 +86,5 @@ if [ "$report_only" = 0 ]; then
     $force
 fi
 "$py" "$here/report.py" --profile "$profile" --results "$out/results.jsonl" --plots "$out" \
-  --doc "$doc"
-echo "report: $doc (plots and results in $out)"
+  --doc "$doc" --full "$full"
+echo "report: $doc, full tables: $full (plots and results in $out)"

@@ -13,30 +13,8 @@ usage: python3 plot_energy.py [OUTDIR]
 import os
 import sys
 
-try:
-    import matplotlib
-except ImportError:  # e.g. a pyenv python3 first in PATH: use Debian's, which has matplotlib
-    if os.path.exists("/usr/bin/python3") and sys.executable != "/usr/bin/python3":
-        os.execv("/usr/bin/python3", ["/usr/bin/python3"] + sys.argv)
-    raise
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-
-
-def read_table(path):
-    """Column names and rows; a row repeating the previous time (fix print at the start of
-    each run) is dropped."""
-    rows = []
-    with open(path) as f:
-        head = f.readline().split()[1:]
-        for line in f:
-            if line.startswith("#") or not line.strip():
-                continue
-            row = [float(v) for v in line.split()]
-            if rows and row[0] == rows[-1][0]:
-                continue
-            rows.append(row)
-    return head, rows
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
+import kifmm_plots as kp  # noqa: E402
 
 
 def read_frames(path):
@@ -97,26 +75,21 @@ def aggregates(pebbles, cut):
 
 
 def main(directory="out"):
-    head, rows = read_table(os.path.join(directory, "energy.dat"))
-    col = {name: k for k, name in enumerate(head)}
-    t = [r[0] for r in rows]
-    th = [ti / t[-1] for ti in t]
-    uref = abs(rows[-1][col["U_LR"]])
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.6))
-    ax = axes[0]
-    ax.plot(th, [r[col["U_LR"]] / uref for r in rows], label=r"$U_{LR}$")
-    ax.set_ylabel(r"$\hat U = U / |U_{LR}(1)|$")
-    ax.legend()
+    e = kp.Energy(directory, uref="last")
+    fig, axes = kp.figure(3, (13, 3.6))
+    kp.plot_ulr(axes[0], e, ylabel=r"$\hat U = U / |U_{LR}(1)|$")
     ax = axes[1]
-    g0 = rows[0][col["U_gra"]]
-    ax.plot(th, [(r[col["U_gra"]] - g0) / uref for r in rows], label=r"$U_{gra} - U_{gra}(0)$")
-    ax.plot(th, [r[col["U_ela"]] / uref for r in rows], label=r"$U_{ela}$")
-    ax.plot(th, [r[col["U_kin"]] / uref for r in rows], label=r"$U_{kin}$")
+    uref = e.uref
+    g0 = e.column("U_gra")[0]
+    ax.plot(e.th, [(u - g0) / uref for u in e.column("U_gra")], label=r"$U_{gra} - U_{gra}(0)$")
+    ax.plot(e.th, [u / uref for u in e.column("U_ela")], label=r"$U_{ela}$")
+    ax.plot(e.th, [u / uref for u in e.column("U_kin")], label=r"$U_{kin}$")
     ax.set_ylabel(r"$\hat U$")
     ax.legend()
     ax = axes[2]
     frames = read_frames(os.path.join(directory, "clumps.dump"))
     radius = float(os.environ.get("PEBBLE_RADIUS", "0.005"))
+    t = e.t
     dt = t[-1] / frames[-1][0] if frames[-1][0] else 1.0
     series = []
     with open(os.path.join(directory, "aggregates.dat"), "w") as f:
@@ -128,16 +101,13 @@ def main(directory="out"):
     ax.plot([s * dt / t[-1] for s, _ in series], [n for _, n in series], "o-", label="largest aggregate")
     ax.set_ylabel("largest aggregate (clumps)")
     ax2 = ax.twinx()
-    ax2.plot(th, [r[col["zcm/L"]] for r in rows], color="C1", label="centre of mass z / L")
+    ax2.plot(e.th, e.column("zcm/L"), color="C1", label="centre of mass z / L")
     ax2.set_ylabel("centre of mass z / L")
     ax.legend(loc="upper left")
     ax2.legend(loc="center right")
     for ax in axes:
-        ax.set_xlabel(r"$\hat t = t / T_{max}$")
-    fig.tight_layout()
-    out = os.path.join(directory, "energy.png")
-    fig.savefig(out, dpi=90)
-    print("wrote", out)
+        ax.set_xlabel(kp.T_HAT)
+    kp.save(fig, directory, dpi=90)
 
 
 if __name__ == "__main__":

@@ -13,65 +13,32 @@ TMAX (default: the last time in energy.dat) normalizes t; give 5 for a run stopp
 import os
 import sys
 
-try:
-    import matplotlib
-except ImportError:  # e.g. a pyenv python3 first in PATH: use Debian's, which has matplotlib
-    if os.path.exists("/usr/bin/python3") and sys.executable != "/usr/bin/python3":
-        os.execv("/usr/bin/python3", ["/usr/bin/python3"] + sys.argv)
-    raise
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-
-
-def read_table(path):
-    """Column names and rows; a row repeating the previous time (fix print at the start of
-    each run) is dropped."""
-    rows = []
-    with open(path) as f:
-        head = f.readline().split()[1:]
-        for line in f:
-            if line.startswith("#") or not line.strip():
-                continue
-            row = [float(v) for v in line.split()]
-            if rows and row[0] == rows[-1][0]:
-                continue
-            rows.append(row)
-    return head, rows
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
+import kifmm_plots as kp  # noqa: E402
 
 
 def main(directory="out", tmax=None):
-    head, rows = read_table(os.path.join(directory, "energy.dat"))
-    col = {name: k for k, name in enumerate(head)}
-    t = [r[0] for r in rows]
-    tmax = float(tmax) if tmax else t[-1]
-    th = [ti / tmax for ti in t]
-    uref = abs(rows[0][col["U_LR"]])
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.6))
-    ax = axes[0]
-    ax.plot(th, [r[col["U_LR"]] / uref for r in rows], label=r"$U_{LR}$")
-    ax.set_ylabel(r"$\hat U = U / |U_{LR}(0)|$")
-    ax.legend()
+    e = kp.Energy(directory, tmax=tmax, uref="first")
+    fig, axes = kp.figure(3, (13, 3.6))
+    kp.plot_ulr(axes[0], e, ylabel=r"$\hat U = U / |U_{LR}(0)|$")
     ax = axes[1]
-    ax.semilogy(th, [max(r[col["U_kin"]], 1e-30) / uref for r in rows], label=r"$U_{kin}$")
-    ax.semilogy(th, [max(r[col["U_ela"]], 1e-30) / uref for r in rows], label=r"$U_{ela}$")
+    ax.semilogy(e.th, [max(u, 1e-30) / e.uref for u in e.column("U_kin")], label=r"$U_{kin}$")
+    ax.semilogy(e.th, [max(u, 1e-30) / e.uref for u in e.column("U_ela")], label=r"$U_{ela}$")
     ax.set_ylabel(r"$\hat U$")
     ax.set_ylim(bottom=1e-6)
     ax.legend()
     ax = axes[2]
-    ax.plot(th, [r[col["Rg"]] for r in rows], label=r"$R_g$")
+    ax.plot(e.th, e.column("Rg"), label=r"$R_g$")
     ax.set_ylabel(r"$R_g$")
     ax2 = ax.twinx()
-    ax2.plot(th, [r[col["axis_ratio"]] for r in rows], color="C1", label="axis ratio")
+    ax2.plot(e.th, e.column("axis_ratio"), color="C1", label="axis ratio")
     ax2.set_ylabel("axis ratio (shortest / longest)")
     ax2.set_ylim(0, 1.02)
     ax.legend(loc="upper center")
     ax2.legend(loc="center right")
     for ax in axes:
-        ax.set_xlabel(r"$\hat t = t / T_{max}$")
-    fig.tight_layout()
-    out = os.path.join(directory, "energy.png")
-    fig.savefig(out, dpi=90)
-    print("wrote", out)
+        ax.set_xlabel(kp.T_HAT)
+    kp.save(fig, directory, dpi=90)
 
 
 if __name__ == "__main__":

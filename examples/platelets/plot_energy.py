@@ -11,61 +11,33 @@ nearest-platelet distance).
 
 usage: python3 plot_energy.py [OUTDIR]
 """
+import importlib
 import os
 import sys
 
-try:
-    import matplotlib
-except ImportError:  # e.g. a pyenv python3 first in PATH: use Debian's, which has matplotlib
-    if os.path.exists("/usr/bin/python3") and sys.executable != "/usr/bin/python3":
-        os.execv("/usr/bin/python3", ["/usr/bin/python3"] + sys.argv)
-    raise
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "common"))
 sys.path.insert(0, os.path.join(HERE, "..", "..", "unittest", "examples"))
+import kifmm_plots as kp  # noqa: E402
+
 try:
-    import importlib
     checker = importlib.import_module("check_platelets")
 except ImportError:
     checker = None
 
 
-def read_table(path):
-    """Column names and rows; a row repeating the previous time (fix print at the start of
-    each run) is dropped."""
-    rows = []
-    with open(path) as f:
-        head = f.readline().split()[1:]
-        for line in f:
-            if line.startswith("#") or not line.strip():
-                continue
-            row = [float(v) for v in line.split()]
-            if rows and row[0] == rows[-1][0]:
-                continue
-            rows.append(row)
-    return head, rows
-
-
 def main(directory="out"):
-    head, rows = read_table(os.path.join(directory, "energy.dat"))
-    col = {name: k for k, name in enumerate(head)}
-    t = [r[0] for r in rows]
-    th = [ti / t[-1] for ti in t]
-    uref = abs(rows[-1][col["U_LR"]])
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.6))
-    ax = axes[0]
-    ax.plot(th, [r[col["U_LR"]] / uref for r in rows], label=r"$U_{LR}$")
-    ax.set_ylabel(r"$\hat U = U / |U_{LR}(1)|$")
-    ax.legend()
+    e = kp.Energy(directory, uref="last")
+    fig, axes = kp.figure(3, (13, 3.6))
+    kp.plot_ulr(axes[0], e, ylabel=r"$\hat U = U / |U_{LR}(1)|$")
     ax = axes[1]
     for name, label in (("U_tra", r"$U_{tra}$"), ("U_rot", r"$U_{rot}$"),
                         ("U_kin", r"$U_{kin}$"), ("U_ela", r"$U_{ela}$")):
-        ax.plot(th, [r[col[name]] / uref for r in rows], label=label)
+        ax.plot(e.th, [u / e.uref for u in e.column(name)], label=label)
     ax.set_ylabel(r"$\hat U$")
     ax.legend()
     ax = axes[2]
+    t = e.t
     dump = os.path.join(directory, "pebbles.dump")
     if checker is not None and os.path.exists(dump):
         frames = checker.read_frames(dump)
@@ -85,11 +57,8 @@ def main(directory="out"):
         ax.legend(loc="lower left")
         ax2.legend(loc="upper right")
     for ax in axes:
-        ax.set_xlabel(r"$\hat t = t / T_{max}$")
-    fig.tight_layout()
-    out = os.path.join(directory, "energy.png")
-    fig.savefig(out, dpi=90)
-    print("wrote", out)
+        ax.set_xlabel(kp.T_HAT)
+    kp.save(fig, directory, dpi=90)
 
 
 if __name__ == "__main__":

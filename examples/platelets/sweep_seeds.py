@@ -11,7 +11,7 @@ functions. Prints one line per seed and the number that pass (S > 0.9, mean near
 
 usage: sweep_seeds.py --lmp LMP [--seeds 1 2 3 ...] [--jobs 1] [--example DIR] [--keep]
                       [--table FILE] [-- LAMMPS -var args]
-Run it with OMP_NUM_THREADS=1 and nice on a shared machine, e.g.
+Run it with OMP_NUM_THREADS=1 (and nice when other jobs share the cores), e.g.
     OMP_NUM_THREADS=1 nice -n 19 python3 sweep_seeds.py --lmp ../../build/lmp_kifmm \
         --seeds 1 2 3 4 5 6 7 8 9 10 --jobs 2
 """

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Check the outcome of examples/charges-box from its outputs (out/final.dump).
 
-Asserts, as issue 8 names them: the fraction of spheres whose centre is within 2r of a wall
+Asserts: the fraction of spheres whose centre is within 2r of a wall
 exceeds 0.9, and the edge regions of the walls are denser than the face centres.
 
 Wall spheres (centre within 2r of a wall) are assigned to their nearest wall and located by

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Check the outcome of examples/dipoles from its outputs.
 
-Asserts, as issue 8 names them: the largest aggregate (clumps connected through pebble
+Asserts: the largest aggregate (clumps connected through pebble
 contacts, pebble centres of different clumps closer than 2.04 r) grows to many clumps, and the
 centre of mass falls. Thresholds (defaults): largest aggregate >= 20 clumps in the last frame
 of out/clumps.dump and at least 5x its size in the first frame; zcm/L at the end below its

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Check the outcome of examples/gravity-collapse from its outputs.
 
-Asserts, as issue 8 names them: the radius of gyration falls by more than 3x (first row of
+Asserts: the radius of gyration falls by more than 3x (first row of
 out/energy.dat against out/final.dump) and the final ball is nearly spherical: the axis
 ratio sqrt(lambda_min / lambda_max) of the gyration tensor of all spheres exceeds 0.8.
 

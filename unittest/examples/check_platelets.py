@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Check the outcome of examples/platelets from its outputs (out/pebbles.dump).
 
-Asserts, as issue 8 names them: the platelet normals stay aligned (nematic order parameter
+Asserts: the platelet normals stay aligned (nematic order parameter
 S > 0.9 in the last frame) and the nearest-platelet spacing shrinks to near contact (mean over
 platelets of the distance to the nearest other platelet's centre, in the last frame, below
 1.5 x the platelet thickness h + 2r = 0.026 and below 0.6 x its value in the first frame).

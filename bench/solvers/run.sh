@@ -8,8 +8,8 @@
 #                                        bench/solvers/results/, summary in doc/benchmarks.md
 #   bash bench/solvers/run.sh --quick    N <= 1e4, few solvers (minutes): into the build dir
 #   bash bench/solvers/run.sh --tiny     the smoke test's inputs (seconds)
-# With --quick and --tiny the output directory holds the full tables as benchmarks.md and the
-# summary as summary.md.
+# With --quick and --tiny the output directory holds the full tables (full_report.md) and the
+# summary (summary.md).
 # Options: --out DIR (results + plots), --doc FILE (summary page), --full FILE (full tables),
 #   --build DIR (default: build/ of this checkout, or $KIFMM_BUILD_DIR), --bin PATH (no build),
 #   --only CASE[,CASE], --max-n N, --force (rerun what the results file has), --report-only,
@@ -54,7 +54,7 @@ if [ "$profile" = full ]; then
 else
   out="${out:-$build/bench_solvers_$profile}"
   doc="${doc:-$out/summary.md}"
-  full="${full:-$out/benchmarks.md}"
+  full="${full:-$out/full_report.md}"
 fi
 mkdir -p "$out"
 work="$out/work"

@@ -16,7 +16,7 @@ def fail(msg):
 
 
 def main(out):
-    doc = os.path.join(out, "benchmarks.md")
+    doc = os.path.join(out, "full_report.md")
     if not os.path.exists(doc):
         fail(f"no report {doc}")
     with open(doc) as f:
@@ -24,6 +24,13 @@ def main(out):
     for heading in ("## Speed ratio at matched error", "## All runs", "## Pending"):
         if heading not in text:
             fail(f"report lacks '{heading}'")
+    # the one-page summary beside it: a table of speed ratios
+    summary = os.path.join(out, "summary.md")
+    if not os.path.exists(summary):
+        fail(f"no summary page {summary}")
+    with open(summary) as f:
+        if not any(l.startswith("|") for l in f):
+            fail("the summary page has no table")
 
     # runs tables: "### case" then rows "| spec | N | error | ..."
     tables, case = {}, None

@@ -1,6 +1,6 @@
 // Cost of a periodic (p p p) evaluation relative to a free-space one at the same N and order,
 // measured in the same run as CPU time of the process (clock_gettime PROCESS_CPUTIME; run with
-// OMP_NUM_THREADS=1 on a shared machine), minimum of --reps. Uniform random charges (neutral)
+// OMP_NUM_THREADS=1), minimum of --reps. Uniform random charges (neutral)
 // in the cube [-1,1]^3; the free-space evaluator gets the same cube as fixed root. Potential +
 // gradient, sources = targets.
 // Default: the trees kspace_style kifmm chooses on one rank from the points (choose_tree(kernel,

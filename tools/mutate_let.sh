@@ -1,15 +1,17 @@
 #!/usr/bin/env bash
 # Mutation checks of the locally essential tree's conditions (doc/design.md, "MPI"): each
 # mutation of src/KIFMM/engine/distributed.cpp must make some engine distributed test fail.
-#   git worktree add /tmp/wt HEAD && WT=/tmp/wt bash tools/mutate_let.sh
+#   git worktree add ../kifmm-mutate HEAD && WT=../kifmm-mutate bash tools/mutate_let.sh
 # Rebuilds engine_test_distributed in $WT/build once per mutation (about 2 min each on 2 cores)
 # and prints the tests that fail on 2, 3 and 4 ranks ("none": the mutation was not caught).
 set -u
-cd "${WT:?set WT to a worktree of this repository}/src/KIFMM/engine"
-cp distributed.cpp /tmp/good.cpp
+WT="$(cd "${WT:?set WT to a worktree of this repository}" && pwd)"
+cd "$WT/src/KIFMM/engine"
+good="$(mktemp)"
+cp distributed.cpp "$good"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMP_NUM_THREADS=1
 [ -d $WT/build ] || nice cmake -S $WT -B $WT/build -DCMAKE_BUILD_TYPE=Release -DKIFMM_ENGINE_ONLY=ON >/dev/null
-mut() { name=$1; shift; cp /tmp/good.cpp distributed.cpp; python3 -c "
+mut() { name=$1; shift; cp "$good" distributed.cpp; python3 -c "
 import sys
 s=open('distributed.cpp').read()
 for a,b in zip(sys.argv[1::2],sys.argv[2::2]):
@@ -33,5 +35,5 @@ mut S2_no_asking_cells_in_F "if (from_e > from_b) {" "if (false) {"
 mut S3_coarse_w_as_leaf "(y.coarse || !touch(a, y.cell, shifts))" "(!touch(a, y.cell, shifts))"
 mut S4_coarse_not_sent "            q.insert(q.end(), {C.level, C.ix, C.iy, C.iz, 2});
             ++q[at];" "            (void) at;"
-cp /tmp/good.cpp distributed.cpp
+cp "$good" distributed.cpp
 echo done

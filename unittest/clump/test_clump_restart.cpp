@@ -1,4 +1,4 @@
-// fix clump/rigid and restart / data files (issue #10):
+// fix clump/rigid and restart / data files:
 //  - a run split by write_restart / read_restart equals the unsplit run: bit for bit on one
 //    rank, to 1e-12 on two (registered twice: serial and mpirun -np 2). The system has clumps
 //    of three shapes with charged pebbles, kspace kifmm with fix kifmm/stride 5 (the split is

@@ -231,7 +231,7 @@ TEST(ClumpTemplate, FuzzFindingsAreClearErrors)
                               "inertia would not fit a double)");
   s[1].r = 1e-9;
   EXPECT_EQ(check_pebbles(s), "pebble diameters from 2e-09 to 0.01: a ratio above 1e+06 is not supported");
-  // regression-huge-radius (CI fuzzing, session 8): one pebble of radius 5e299 passed the
+  // regression-huge-radius (found by fuzzing): one pebble of radius 5e299 passed the
   // checks and its volume overflowed to inf in union_mass_properties
   EXPECT_EQ(check_pebbles({{{0, 0, 0}, 5e299}}), "pebble 1 has diameter 1e+300 (must be between 2e-60 and 2e60: its "
                                                   "moments of inertia would not fit a double)");

@@ -82,8 +82,8 @@ namespace {
 // (bench/calibrate.cpp): non-negative least squares over measured single-thread CPU times of
 // evaluations of uniform points (both boundaries, several N and depths) and of two Plummer
 // spheres (open, leaf sizes 16-1024), with the counts of their actual trees
-// (actual_tree_counts); in brackets the RMS relative residual of the fit. Measured 2026-11-23
-// (load 2-3 on 2 cores). The translation and cell terms are nearly collinear (a constant that
+// (actual_tree_counts); in brackets the RMS relative residual of the fit (provenance of the
+// measurement: bench/results/README.md). The translation and cell terms are nearly collinear (a constant that
 // is 0 went to the others).
 struct CostRow {
   int order;

@@ -19,7 +19,7 @@
 // (calibration.cpp). self_extra: a leaf with itself runs the one-sided loop over all m^2
 // ordered pairs (p2p_mutual.h, AVX-512), not m^2 / 2 mutual ones; it decides depth 0 against
 // depth 1 for small N (open: both are the same direct sum, measured 1.25-1.44x slower at depth
-// 0 for 1e3 atoms in the bench/solvers campaign). The uniform tree choice (choose_tree(order, n,
+// 0 for 1e3 atoms by bench/solvers). The uniform tree choice (choose_tree(order, n,
 // periodic)) is the depth of least modelled cost, realised by the leaf size
 // leaf_size_for_depth(n, d).
 //

@@ -9,9 +9,11 @@
 #pragma once
 
 #include "lmptype.h"
+#include "pointers.h"
 
 #include <functional>
 #include <string>
+#include <type_traits>
 
 namespace LAMMPS_NS {
 
@@ -25,7 +27,9 @@ class KIFMMRigidBodies {
   // strength (charge or mass) of a local atom
   using Strength = std::function<double(int i)>;
 
-  virtual ~KIFMMRigidBodies() = default;
+  // as LAMMPS's Pointers (noexcept(false) where LAMMPS errors may throw from destructors): the
+  // fix implementing this interface is also a Fix
+  virtual ~KIFMMRigidBodies() noexcept(std::is_nothrow_destructible_v<Pointers>) {}
 
   // ID of the fix (for messages)
   virtual const char *bodies_id() const = 0;

@@ -3,8 +3,7 @@
 #include "clump_math.h"
 #include "clump_template.h"
 #include "clump_union.h"
-#include "molecule_layout.h"
-#include "rigid_small_layout.h"
+#include "lammps_api.h"
 
 #include "atom.h"
 #include "comm.h"
@@ -31,6 +30,7 @@
 using namespace LAMMPS_NS;
 using clump::Mat3;
 using clump::Vec3;
+using kifmm_lammps::RigidSmallAccess;
 
 namespace {
 
@@ -299,7 +299,7 @@ void FixClumpRigid::init()
   // clump values are computed again in every run (charges or pebbles may have changed), and
   // the pebble counts checked again
   counts_checked = false;
-  bodies_layout = nullptr;
+  bodies_rigid = nullptr;
   for (int i = 0; i < atom->nlocal; ++i) bodyval[i][BV_VALID] = 0.0;
   // rigid/small has not set up its bodies yet (it does so once, at the first run's setup,
   // from the infile): give it the clumps as they are now, positions and velocities, or the
@@ -386,30 +386,14 @@ void FixClumpRigid::setup_templates()
   if (imol < 0)
     error->all(FLERR, "Fix clump/rigid molecule template {} does not exist", template_id);
   Molecule **mols = &atom->molecules[imol];
-  if (strcmp(mols[0]->id, template_id.c_str()) != 0 || mols[0]->nset < 1 ||
-      mols[0]->nset > atom->nmolecule - imol)
+  if (!kifmm_lammps::molecule_members_ok(mols, atom->nmolecule - imol, template_id))
     error->all(FLERR, "Fix clump/rigid: the Molecule class of this LAMMPS does not match the "
                "layout the package was built for");
   const int nset = mols[0]->nset;
   for (int m = 0; m < nset; ++m) {
     Molecule *mol = mols[m];
-    auto is01 = [](int f) { return f == 0 || f == 1; };
-    bool ok = mol->natoms > 0 && is01(mol->xflag) && is01(mol->radiusflag) &&
-        is01(mol->massflag) && is01(mol->comflag) && is01(mol->inertiaflag) && is01(mol->qflag);
-    if (ok && mol->xflag) {
-      // compute_center() (LAMMPS's own code) must put the mean of x into center
-      mol->compute_center();
-      double c[3] = {0, 0, 0}, ext = 0.0;
-      for (int i = 0; i < mol->natoms; ++i)
-        for (int d = 0; d < 3; ++d) c[d] += mol->x[i][d] / mol->natoms;
-      for (int i = 0; i < mol->natoms; ++i)
-        for (int d = 0; d < 3; ++d) ext = std::max(ext, std::fabs(mol->x[i][d] - c[d]));
-      for (int d = 0; d < 3; ++d)
-        if (std::fabs(c[d] - mol->center[d]) > 1e-9 * (ext + 1e-300) + 1e-300) ok = false;
-    }
-    if (!ok)
-      error->all(FLERR, "Fix clump/rigid: the Molecule class of this LAMMPS does not match the "
-                 "layout the package was built for");
+    if (mol->natoms < 1)
+      error->all(FLERR, "Fix clump/rigid molecule template {} has no atoms", template_id);
     if (!mol->xflag || !mol->radiusflag)
       error->all(FLERR, "Fix clump/rigid molecule template {} needs Coords and Diameters "
                  "sections (pebble radii)", template_id);
@@ -688,43 +672,14 @@ void FixClumpRigid::set_molecule(int nlocalprev, tagint tagprev, int imol, doubl
 }
 
 /* ----------------------------------------------------------------------
-   rigid/small's internals, checked: nullptr (and why) when the layout does not match
+   rigid/small's internals, checked: empty (and why) when they cannot be used
 ------------------------------------------------------------------------- */
 
-RigidSmallLayout *FixClumpRigid::rigid_layout(std::string &why)
+RigidSmallAccess FixClumpRigid::rigid_layout(std::string &why)
 {
   Fix *r = rigid_fix();
-  auto *v = reinterpret_cast<RigidSmallLayout *>(r);
-  // (the object is larger than the declared part: these reads stay inside it)
-  const char *mismatch = "the FixRigidSmall class of this LAMMPS does not match the layout the "
-                         "package was built for";
-  if (!(v->me == comm->me && v->nprocs == comm->nprocs && v->inpfile &&
-        bodies_file == v->inpfile && (v->maxmol == maxmol || (maxmol == 0 && v->maxmol == -1)) &&
-        v->reinitflag == 0 &&
-        (v->setupflag == 0 || v->setupflag == 1) &&
-        v->bodysize == (int) (sizeof(RigidSmallLayout::Body) / sizeof(double)))) {
-    why = mismatch;
-    return nullptr;
-  }
-  int dim = 0;
-  void *a2b = r->extract("body", dim);    // nullptr before the set-up (or with no atoms)
-  if (!v->setupflag) {
-    why = "its bodies are not set up";
-    return nullptr;
-  }
-  void *mb = r->extract("masstotal", dim);    // owned+ghost body masses, refreshed
-  bool ok = (void *) v->atom2body == a2b && (void *) v->mass_body == mb &&
-      v->nlocal_body >= 0 && v->nghost_body >= 0 &&
-      v->nlocal_body + v->nghost_body <= v->nmax_body;
-  if (ok)
-    for (int b = 0; b < v->nlocal_body + v->nghost_body && ok; ++b)
-      ok = v->body[b].ilocal >= 0 && v->body[b].ilocal < atom->nlocal + atom->nghost &&
-          v->body[b].mass == static_cast<double *>(mb)[b];
-  if (!ok) {
-    why = mismatch;
-    return nullptr;
-  }
-  return v;
+  why = RigidSmallAccess::check(lmp, r, bodies_file, maxmol);
+  return why.empty() ? RigidSmallAccess(r) : RigidSmallAccess();
 }
 
 /* ----------------------------------------------------------------------
@@ -801,10 +756,11 @@ void FixClumpRigid::setup(int)
   conjqm_hold.clear();
   if (integrator == "rigid/nve/small" && conjqm_valid) {
     std::string why;
-    if (RigidSmallLayout *v = rigid_layout(why))
-      for (int b = 0; b < v->nlocal_body; ++b)
-        conjqm_hold.push_back({v->body[b].conjqm[0], v->body[b].conjqm[1],
-                               v->body[b].conjqm[2], v->body[b].conjqm[3]});
+    if (RigidSmallAccess v = rigid_layout(why))
+      for (int b = 0; b < v.nlocal_body(); ++b) {
+        const double *q = v.body()[b].conjqm;
+        conjqm_hold.push_back({q[0], q[1], q[2], q[3]});
+      }
   }
 }
 
@@ -818,10 +774,12 @@ void FixClumpRigid::initial_integrate(int)
     int ig = modify->find_fix(grav_id), dim = 0;
     auto *g = ig >= 0 ? static_cast<double *>(modify->fix[ig]->extract("gvec", dim)) : nullptr;
     std::string why;
-    RigidSmallLayout *v = g ? rigid_layout(why) : nullptr;
-    if (v) {
-      for (int b = 0; b < v->nlocal_body; ++b) {
-        RigidSmallLayout::Body &body = v->body[b];
+    RigidSmallAccess v = g ? rigid_layout(why) : RigidSmallAccess();
+    int usable = v ? 1 : 0, all_usable = 0;
+    MPI_Allreduce(&usable, &all_usable, 1, MPI_INT, MPI_MIN, world);
+    if (all_usable) {
+      for (int b = 0; b < v.nlocal_body(); ++b) {
+        auto &body = v.body()[b];
         body.fcm[0] += g[0] * body.mass;
         body.fcm[1] += g[1] * body.mass;
         body.fcm[2] += g[2] * body.mass;
@@ -831,15 +789,16 @@ void FixClumpRigid::initial_integrate(int)
       error->warning(FLERR,
                      "Fix clump/rigid {}: cannot add the clump weight to the first half-step "
                      "of the run ({}): the clumps lag by g dt/2",
-                     id, g ? why : std::string("no gravity vector"));
+                     id, !g ? std::string("no gravity vector")
+                            : why.empty() ? std::string("on another rank") : why);
     }
   }
   if (!conjqm_hold.empty()) {
     std::string why;
-    RigidSmallLayout *v = rigid_layout(why);
-    if (v && v->nlocal_body == (int) conjqm_hold.size())
-      for (int b = 0; b < v->nlocal_body; ++b)
-        for (int k = 0; k < 4; ++k) v->body[b].conjqm[k] = conjqm_hold[b][k];
+    RigidSmallAccess v = rigid_layout(why);
+    if (v && v.nlocal_body() == (int) conjqm_hold.size())
+      for (int b = 0; b < v.nlocal_body(); ++b)
+        for (int k = 0; k < 4; ++k) v.body()[b].conjqm[k] = conjqm_hold[b][k];
     conjqm_hold.clear();
   }
   conjqm_valid = true;
@@ -848,7 +807,7 @@ void FixClumpRigid::initial_integrate(int)
 void FixClumpRigid::restore_state()
 {
   std::string why;
-  RigidSmallLayout *v = rigid_layout(why);
+  RigidSmallAccess v = rigid_layout(why);
   int bad = v ? 0 : 1, anybad = 0;
   MPI_Allreduce(&bad, &anybad, 1, MPI_INT, MPI_MAX, world);
   if (anybad) {
@@ -861,11 +820,11 @@ void FixClumpRigid::restore_state()
     return;
   }
   int missing = 0, nset = 0;
-  for (int b = 0; b < v->nlocal_body + v->nghost_body; ++b) {
-    RigidSmallLayout::Body &body = v->body[b];
+  for (int b = 0; b < v.nlocal_body() + v.nghost_body(); ++b) {
+    auto &body = v.body()[b];
     auto it = restored.find(atom->molecule[body.ilocal]);
     if (it == restored.end()) {
-      if (b < v->nlocal_body) ++missing;
+      if (b < v.nlocal_body()) ++missing;
       continue;
     }
     const double *r = it->second.data();
@@ -885,15 +844,15 @@ void FixClumpRigid::restore_state()
       if (integrator == "rigid/nve/small") body.conjqm[k] = r[30 + k];
     }
     body.image = (imageint) r[34];
-    if (b < v->nlocal_body) ++nset;
+    if (b < v.nlocal_body()) ++nset;
   }
   for (int i = 0; i < atom->nlocal; ++i) {
-    if (v->atom2body[i] < 0) continue;
+    if (v.atom2body()[i] < 0) continue;
     if (rdisp[i][3] == 0.0) {
       ++missing;
       continue;
     }
-    for (int d = 0; d < 3; ++d) v->displace[i][d] = rdisp[i][d];
+    for (int d = 0; d < 3; ++d) v.displace()[i][d] = rdisp[i][d];
     rdisp[i][3] = 0.0;
   }
   int counts[2] = {nset, missing}, all[2];
@@ -920,7 +879,7 @@ void FixClumpRigid::write_restart(FILE *fp)
   int exact = 0;
   std::string why;
   if (rigid_fix()->extract("body", dim) != nullptr) {
-    exact = rigid_layout(why) != nullptr ? 1 : 0;
+    exact = rigid_layout(why) ? 1 : 0;
     int all;
     MPI_Allreduce(&exact, &all, 1, MPI_INT, MPI_MIN, world);
     if (!all && comm->me == 0 && !restart_warned) {
@@ -935,7 +894,7 @@ void FixClumpRigid::write_restart(FILE *fp)
   write_exact = exact != 0;
   double list[restart_size] = {(double) restart_version, density, tol, (double) exact, 0.0};
   if (exact) {
-    double n = reinterpret_cast<RigidSmallLayout *>(rigid_fix())->nlocal_body, total = 0.0;
+    double n = RigidSmallAccess(rigid_fix()).nlocal_body(), total = 0.0;
     MPI_Allreduce(&n, &total, 1, MPI_DOUBLE, MPI_SUM, world);
     list[4] = total;
   }
@@ -959,9 +918,9 @@ void FixClumpRigid::restart(char *buf)
 int FixClumpRigid::size_restart(int i)
 {
   if (!write_exact || !(atom->mask[i] & groupbit)) return 2;
-  auto *v = reinterpret_cast<RigidSmallLayout *>(rigid_fix());
-  if (v->atom2body[i] < 0) return 2;
-  return v->bodyown[i] >= 0 ? 5 + NREC : 5;
+  RigidSmallAccess v(rigid_fix());
+  if (v.atom2body()[i] < 0) return 2;
+  return v.bodyown()[i] >= 0 ? 5 + NREC : 5;
 }
 
 int FixClumpRigid::maxsize_restart()
@@ -975,10 +934,10 @@ int FixClumpRigid::pack_restart(int i, double *buf)
   buf[0] = n;    // the count first: other fixes skip over it
   buf[1] = n == 2 ? 0 : (n == 5 ? 1 : 2);
   if (n == 2) return n;
-  auto *v = reinterpret_cast<RigidSmallLayout *>(rigid_fix());
-  for (int d = 0; d < 3; ++d) buf[2 + d] = v->displace[i][d];
+  RigidSmallAccess v(rigid_fix());
+  for (int d = 0; d < 3; ++d) buf[2 + d] = v.displace()[i][d];
   if (n == 5) return n;
-  const RigidSmallLayout::Body &b = v->body[v->bodyown[i]];
+  const auto &b = v.body()[v.bodyown()[i]];
   double *r = buf + 5;
   r[0] = (double) atom->molecule[i];
   r[1] = b.mass;

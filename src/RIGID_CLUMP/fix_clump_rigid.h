@@ -29,6 +29,10 @@
 #include <string>
 #include <vector>
 
+namespace kifmm_lammps {
+class RigidSmallAccess;
+}
+
 namespace LAMMPS_NS {
 
 class FixClumpRigid : public Fix, public KIFMMRigidBodies {
@@ -113,13 +117,14 @@ class FixClumpRigid : public Fix, public KIFMMRigidBodies {
   enum { BV_STRENGTH = value_strength, BV_VALID = value_valid, BV_COUNT = value_count, NBV };
   double **bodyval = nullptr;
   bool counts_checked = false;       // pebble counts checked in this run
-  class RigidSmallLayout *bodies_layout = nullptr;    // set by bodies_ready()
+  Fix *bodies_rigid = nullptr;    // the rigid fix, when bodies_ready() found its bodies usable
   void gather_clumps(const Strength *strength, const BodyFunction *f);
   static int clump_callback(int n, char *inbuf, int &flag, int *&proclist, char *&outbuf, void *ptr);
   const BodyFunction *rendezvous_function = nullptr;
 
   Fix *rigid_fix();
-  class RigidSmallLayout *rigid_layout(std::string &why);
+  // rigid/small's bodies, checked (empty, and why, when they cannot be used)
+  kifmm_lammps::RigidSmallAccess rigid_layout(std::string &why);
   void setup_templates();
   void write_bodies_file();
   void write_restored_bodies_file();

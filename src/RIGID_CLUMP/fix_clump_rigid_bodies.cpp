@@ -4,7 +4,7 @@
 // against the count its mass properties were computed for.
 #include "fix_clump_rigid.h"
 
-#include "rigid_small_layout.h"
+#include "lammps_api.h"
 
 #include "atom.h"
 #include "comm.h"
@@ -16,6 +16,7 @@
 #include <vector>
 
 using namespace LAMMPS_NS;
+using kifmm_lammps::RigidSmallAccess;
 
 namespace {
 
@@ -39,26 +40,28 @@ struct PebbleOut {
 bool FixClumpRigid::bodies_ready(std::string &why)
 {
   why.clear();
-  bodies_layout = rigid_layout(why);
-  int bad = bodies_layout ? 0 : 1, anybad = 0;
+  bodies_rigid = rigid_layout(why) ? rigid_fix() : nullptr;
+  int bad = bodies_rigid ? 0 : 1, anybad = 0;
   MPI_Allreduce(&bad, &anybad, 1, MPI_INT, MPI_MAX, world);
   if (anybad && why.empty()) why = "not on another rank";
-  if (anybad) bodies_layout = nullptr;
+  if (anybad) bodies_rigid = nullptr;
   return !anybad;
 }
 
 const double *FixClumpRigid::body_values(int i) const
 {
-  if (!bodies_layout || !(atom->mask[i] & groupbit) || bodies_layout->atom2body[i] < 0)
+  if (!bodies_rigid || !(atom->mask[i] & groupbit) ||
+      RigidSmallAccess(bodies_rigid).atom2body()[i] < 0)
     return nullptr;
   return bodyval[i];
 }
 
 void FixClumpRigid::body_frame(int i, double rotation[9], double offset[3]) const
 {
-  const RigidSmallLayout::Body &b = bodies_layout->body[bodies_layout->atom2body[i]];
+  const RigidSmallAccess v(bodies_rigid);
+  const auto &b = v.body()[v.atom2body()[i]];
   const double *axis[3] = {b.ex_space, b.ey_space, b.ez_space};
-  const double *d = bodies_layout->displace[i];
+  const double *d = v.displace()[i];
   for (int a = 0; a < 3; ++a) {
     offset[a] = 0.0;
     for (int c = 0; c < 3; ++c) {
@@ -70,7 +73,9 @@ void FixClumpRigid::body_frame(int i, double rotation[9], double offset[3]) cons
 
 tagint FixClumpRigid::body_tag(int i) const
 {
-  if (!bodies_layout || !(atom->mask[i] & groupbit) || bodies_layout->atom2body[i] < 0) return 0;
+  if (!bodies_rigid || !(atom->mask[i] & groupbit) ||
+      RigidSmallAccess(bodies_rigid).atom2body()[i] < 0)
+    return 0;
   return atom->molecule[i];
 }
 
@@ -87,20 +92,21 @@ void FixClumpRigid::compute_body_values(const Strength &strength, const BodyFunc
 
 void FixClumpRigid::gather_clumps(const Strength *strength, const BodyFunction *f)
 {
-  if (f && !bodies_layout)
+  if (f && !bodies_rigid)
     error->all(FLERR, "Fix clump/rigid {}: clump geometry requested before its bodies are ready", id);
   const int nlocal = atom->nlocal, nprocs = comm->nprocs;
+  const RigidSmallAccess v(f ? bodies_rigid : nullptr);
   std::vector<PebbleIn> in;
   std::vector<int> procs;
   for (int i = 0; i < nlocal; ++i) {
     if (!(atom->mask[i] & groupbit)) continue;
-    if (f ? bodies_layout->atom2body[i] < 0 : atom->molecule[i] > maxmol) continue;
+    if (f ? v.atom2body()[i] < 0 : atom->molecule[i] > maxmol) continue;
     PebbleIn p;
     p.mol = atom->molecule[i];
     p.tag = atom->tag[i];
     p.proc = comm->me;
     p.count = (int) bodyval[i][BV_COUNT];
-    for (int d = 0; d < 3; ++d) p.d[d] = f ? bodies_layout->displace[i][d] : 0.0;
+    for (int d = 0; d < 3; ++d) p.d[d] = f ? v.displace()[i][d] : 0.0;
     p.s = strength ? (*strength)(i) : 0.0;
     in.push_back(p);
     procs.push_back((int) (p.mol % nprocs));

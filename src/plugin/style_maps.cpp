@@ -1,8 +1,10 @@
 #include "style_maps.h"
 
 #include "comm.h"
+#include "compute.h"
 #include "domain.h"
 #include "error.h"
+#include "fix.h"
 #include "force.h"
 #include "input.h"
 #include "lammps.h"
@@ -24,6 +26,14 @@ void put(LAMMPS *lmp, Map *map, const lammpsplugin_t &style, Creator creator,
     lmp->error->warning(FLERR, "Overriding existing {} style {} with the plugin's version",
                         style.style, style.name);
   (*map)[style.name] = creator;
+}
+
+// index of the first fix or compute of style `name`, -1 if none
+template <typename T> int first_of_style(T **list, int n, const std::string &name)
+{
+  for (int i = 0; i < n; ++i)
+    if (name == list[i]->style) return i;
+  return -1;
 }
 }    // namespace
 
@@ -94,13 +104,14 @@ bool remove_style_from_maps(LAMMPS *lmp, const std::string &kind, const std::str
     if (force->kspace_style && name == force->kspace_style) force->create_kspace("none", 0);
   } else if (kind == "fix") {
     drop(modify->fix_map);
-    for (int i = modify->find_fix_by_style(name.c_str()); i >= 0;
-         i = modify->find_fix_by_style(name.c_str()))
+    // (deleting a fix may delete others: search again after each)
+    for (int i = first_of_style(modify->fix, modify->nfix, name); i >= 0;
+         i = first_of_style(modify->fix, modify->nfix, name))
       modify->delete_fix(i);
   } else if (kind == "compute") {
     drop(modify->compute_map);
-    for (int i = modify->find_compute_by_style(name.c_str()); i >= 0;
-         i = modify->find_compute_by_style(name.c_str()))
+    for (int i = first_of_style(modify->compute, modify->ncompute, name); i >= 0;
+         i = first_of_style(modify->compute, modify->ncompute, name))
       modify->delete_compute(i);
   } else if (kind == "region") {
     drop(lmp->domain->region_map);

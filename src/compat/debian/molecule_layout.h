@@ -1,6 +1,7 @@
 // Declaration of the data members of LAMMPS's Molecule class (a molecule template), as laid
-// out in the LAMMPS version this package is built against (29 Sep 2021, Debian's
-// liblammps-dev, which does not ship molecule.h).
+// out in LAMMPS 29 Sep 2021 (Debian's liblammps-dev, which does not ship molecule.h), for fix
+// clump/rigid built against Debian's LAMMPS (a source tree's own molecule.h is used otherwise;
+// both through compat/lammps_api.h).
 //
 // Why: fix pour and fix deposit give inserted rigid bodies the mass, centre of mass and
 // inertia of the molecule template (FixRigidSmall::set_molecule reads masstotal, com, itensor
@@ -10,9 +11,10 @@
 // of a molecule file would. LAMMPS offers no accessor for these members, and no header.
 //
 // Only the leading, public data members are declared (the class is never constructed, copied,
-// or sized here), plus the exported member functions the fix calls. The fix checks the layout
-// at run time before it writes anything (template ID, flags in {0,1}, and compute_center()
-// writing the mean of x into `center`), and stops with an error if it does not match.
+// or sized here), plus the exported member functions the fix calls. molecule_members_ok
+// (compat/lammps_api.cpp) checks the layout at run time before the fix writes anything
+// (template ID, flags in {0,1}, and compute_center() writing the mean of x into `center`); the
+// fix stops with an error if it does not match.
 #pragma once
 
 #include "lmptype.h"

@@ -1,6 +1,7 @@
-// Declaration of the data members of LAMMPS's FixRigidSmall, as laid out in the LAMMPS version
-// this package is built against (29 Sep 2021, Debian's liblammps-dev, which does not ship
-// fix_rigid_small.h), for restart files of fix clump/rigid.
+// Declaration of the data members of LAMMPS's FixRigidSmall, as laid out in LAMMPS 29 Sep 2021
+// (Debian's liblammps-dev, which does not ship fix_rigid_small.h), for fix clump/rigid built
+// against Debian's LAMMPS (a source tree's own RIGID/fix_rigid_small.h is used otherwise; both
+// through compat/lammps_api.h).
 //
 // Why: rigid/small of this version keeps its bodies out of binary restart files; it writes a
 // side file (<restart>.rigid, its *infile* format) from which a restarted run re-derives the
@@ -13,10 +14,11 @@
 //
 // Only data members are declared (the class is never constructed, copied or sized here;
 // data members of a class derived from Fix start at the same offset whatever its virtual
-// functions). fix clump/rigid checks the layout before it reads or writes anything through it
-// (rank and size, the infile name it gave, the largest body ID, the atom-to-body array and
-// the body mass vector that FixRigidSmall::extract() returns, sizeof(Body)), and falls back to
-// the documented infile route with a warning if the check fails.
+// functions). RigidSmallAccess::check (compat/lammps_api.cpp) checks the layout before fix
+// clump/rigid reads or writes anything through it (rank and size, the infile name it gave, the
+// largest body ID, the atom-to-body array and the body mass vector that FixRigidSmall::extract()
+// returns, sizeof(Body)); the fix falls back to the documented infile route with a warning if
+// the check fails.
 #pragma once
 
 #include "fix.h"

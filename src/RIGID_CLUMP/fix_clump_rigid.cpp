@@ -762,6 +762,27 @@ void FixClumpRigid::setup(int)
         conjqm_hold.push_back({q[0], q[1], q[2], q[3]});
       }
   }
+  // the pebble forces that rigid/small's setup() sums into the body forces, compared with
+  // those at the first step; they are these forces when its setup() comes right after this one
+  // (it does, unless this fix was defined again with the same ID: other fixes' setup() may
+  // change the forces in between)
+  if (gravity_pending) {
+    int self = -1, rigid = -1;
+    for (int k = 0; k < modify->nfix; ++k) {
+      if (modify->fix[k] == this) self = k;
+      if (id_rigid == modify->fix[k]->id) rigid = k;
+    }
+    grav_measured = self >= 0 && rigid == self + 1;
+    std::string why;
+    double mine[3] = {0.0, 0.0, 0.0};
+    if (RigidSmallAccess v = grav_measured ? rigid_layout(why) : RigidSmallAccess()) {
+      const int *a2b = v.atom2body();
+      for (int i = 0; i < atom->nlocal; ++i)
+        if (a2b[i] >= 0)
+          for (int d = 0; d < 3; ++d) mine[d] += atom->f[i][d];
+    }
+    MPI_Allreduce(mine, grav_fsum, 3, MPI_DOUBLE, MPI_SUM, world);
+  }
 }
 
 void FixClumpRigid::initial_integrate(int)
@@ -778,12 +799,36 @@ void FixClumpRigid::initial_integrate(int)
     int usable = v ? 1 : 0, all_usable = 0;
     MPI_Allreduce(&usable, &all_usable, 1, MPI_INT, MPI_MIN, world);
     if (all_usable) {
-      for (int b = 0; b < v.nlocal_body(); ++b) {
-        auto &body = v.body()[b];
-        body.fcm[0] += g[0] * body.mass;
-        body.fcm[1] += g[1] * body.mass;
-        body.fcm[2] += g[2] * body.mass;
+      // whether rigid/small's setup() has put the weight into the body forces already: their
+      // sum is the pebble forces' (left out), or that plus the weight and, where readable,
+      // the Langevin forces (put in)
+      bool included = kifmm_lammps::rigid_small_setup_has_gravity;
+      if (grav_measured) {
+        double mine[9] = {0.0}, sum[9];
+        for (int b = 0; b < v.nlocal_body(); ++b)
+          for (int d = 0; d < 3; ++d) {
+            mine[d] += v.body()[b].fcm[d];
+            mine[3 + d] += g[d] * v.body()[b].mass;
+          }
+        v.langevin_force(&mine[6]);
+        MPI_Allreduce(mine, sum, 9, MPI_DOUBLE, MPI_SUM, world);
+        auto dist = [&](double w, double l) {
+          double r = 0.0;
+          for (int d = 0; d < 3; ++d) {
+            const double e = sum[d] - grav_fsum[d] - w * sum[3 + d] - l * sum[6 + d];
+            r += e * e;
+          }
+          return r;
+        };
+        included = std::min(dist(1, 0), dist(1, 1)) <= std::min(dist(0, 0), dist(0, 1));
       }
+      if (!included)
+        for (int b = 0; b < v.nlocal_body(); ++b) {
+          auto &body = v.body()[b];
+          body.fcm[0] += g[0] * body.mass;
+          body.fcm[1] += g[1] * body.mass;
+          body.fcm[2] += g[2] * body.mass;
+        }
     } else if (comm->me == 0 && !restart_warned) {
       restart_warned = true;
       error->warning(FLERR,

@@ -107,10 +107,15 @@ class FixClumpRigid : public Fix, public KIFMMRigidBodies {
   // every run set-up (a roundoff-level change); they are kept across runs and restarts
   bool conjqm_valid = false;
   std::vector<std::array<double, 4>> conjqm_hold;
-  // rigid/small's setup() leaves the gravity keyword's force out of the clump forces it
-  // computes: it is added before the first step of each run (as final_integrate would have)
+  // the gravity keyword's force on the clumps must be in the body forces of the first
+  // half-step of a run; rigid/small's setup() leaves it out in some LAMMPS versions (then it is
+  // added before the first step). Which: the body forces rigid/small set up are compared with
+  // the pebble forces it set them up from (grav_fsum, summed in setup() when rigid/small's
+  // setup() comes right after it: grav_measured).
   std::string grav_id;
   bool gravity_pending = false;
+  bool grav_measured = false;
+  double grav_fsum[3] = {0.0, 0.0, 0.0};
 
   // ---- per pebble: pair sums inside its clump (KIFMMRigidBodies::nvalues), the strength they
   // were computed with, valid flag, pebble count of its clump when first checked (0: not yet)

@@ -97,6 +97,11 @@ class RigidSmallAccess {
   LAMMPS_NS::Fix *fix = nullptr;
 };
 
+// Whether rigid/small's setup() puts the force of its gravity keyword into the body forces of
+// the first half-step of a run: LAMMPS 29 Sep 2021 leaves it out, current LAMMPS puts it in.
+// fix clump/rigid measures it at every run; this is what it assumes when it cannot.
+constexpr bool rigid_small_setup_has_gravity = KIFMM_LAMMPS_DATE > 20210929;
+
 // Molecule templates: true when the members of Molecule can be used as declared (always with
 // a tree's molecule.h; Debian's: the declared layout is checked on the templates `mols[0..nset)`
 // of ID `id`, first `nmolecule_left` templates from there on).

@@ -187,7 +187,11 @@ def main():
             os.makedirs(d)
             with open(os.path.join(d, "in.clumps"), "w") as f:
                 f.write(f"plugin load {plugin}\n" + CLUMP_INPUT.format(potentials=os.path.abspath(a.potentials))
-                        + "kspace_style kifmm 1e-6\nrun 10\nprint \"KIFMM DONE $(elong:%.10g)\"\n")
+                        # kspace kifmm (open or fully periodic boundaries) evaluated on the
+                        # clumps; run 0: pebble charges of 1 C in si units would blow them apart
+                        + "change_box all boundary f f f\nkspace_style kifmm 1e-6\n"
+                        + "thermo_style custom step elong\nrun 0\n"
+                        + "print \"KIFMM DONE $(elong:%.10g)\"\n")
             out = run([a.lmp, "-in", "in.clumps", "-log", "log.lammps", "-nocite"], d)
             m = re.search(r"^COUNT (\S+) MASS (\S+) VZ0 (\S+)$", out, re.M)
             v1 = float(re.search(r"^VZ1 (\S+)$", out, re.M).group(1))

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 """Compares the rows of an engine benchmark table (bench_engine output, markdown) with the
 reference points (exafmm-t / PVFMM, 2 threads, evaluation only, no other job running).
 For each reference point the cheapest row (by 1-thread CPU time, the load-independent cost) of

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Engine benchmark: for each configuration and order, times of tree+lists, evaluation,
 // operator setup (cold / from the disk cache), the relative force (gradient) error against a
 // direct sum on a random sample of targets, the speed-up over the vectorized direct sum

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Cost of a periodic (p p p) evaluation relative to a free-space one at the same N and order,
 // measured in the same run as CPU time of the process (clock_gettime PROCESS_CPUTIME; run with
 // OMP_NUM_THREADS=1), minimum of --reps. Uniform random charges (neutral)

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Point sets shared by the benchmark programs.
 #pragma once
 

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Regenerates the choose_order calibration table of src/KIFMM/engine/calibration.cpp.
 // Standard configuration: 100000 uniform random points in a cube, charges uniform in [-1,1]
 // (bench::uniform(100000, 1)), Laplace, potential + gradient; error = relative RMS error of

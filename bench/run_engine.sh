@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 # Runs the KIFMM engine benchmark with 2 OpenMP threads and writes doc/engine_benchmark.md;
 # appends the provenance of the run (date, commit, CPU, load average before / after) to
 # bench/results/engine_benchmark_runs.txt.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 # Tree choice measured in one process (bench_engine --tree-choice, see bench/bench_engine.cpp):
 # per point set and order, the old per-order leaf size, the uniform-points cost model
 # (choose_tree(order, n, periodic)) and the choice from the actual trees of the points

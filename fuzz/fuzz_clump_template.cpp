@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // libFuzzer target: the clump template reader of fix clump/rigid, i.e. what the fix does with
 // the pebbles of a molecule template (src/RIGID_CLUMP/clump_template.cpp: check_pebbles) and,
 // for an accepted template, the union-of-spheres mass properties

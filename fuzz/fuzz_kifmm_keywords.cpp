@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // libFuzzer target: the parser of `kspace_style kifmm ACCURACY` and `kspace_modify kifmm ...`.
 // Input: whitespace-separated tokens; the first is the accuracy, the rest follow "kifmm".
 // Checks: no crash/UB (ASan+UBSan), and every accepted input leaves settings in range.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 # Builds the libFuzzer targets with clang (ASan + UBSan) and runs each for a short time.
 # Usage: fuzz/run-fuzz.sh [SECONDS_PER_TARGET]   (CI runs it briefly through ctest, label fuzz)
 # A crash leaves its input in fuzz/out/: add it to a regression test, then to the corpus.

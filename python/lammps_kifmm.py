@@ -1,3 +1,4 @@
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 """Use the lammps-kifmm styles from Debian's python3-lammps.
 
 Debian's LAMMPS has no ``plugin`` command, so the styles are put into a LAMMPS instance by a

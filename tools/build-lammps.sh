@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 # Builds a current LAMMPS from a source tarball, once per machine, to run the plugin in it:
 # lmp with a shared liblammps and the packages the package's tests and examples need (PLUGIN
 # GRANULAR KSPACE RIGID MOLECULE EXTRA-FIX GRAPHICS DIPOLE), and LAMMPS's force-style test

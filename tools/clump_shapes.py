@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 """Generate clump shapes (rigid clumps of spherical pebbles) as LAMMPS molecule files.
 
 The files are read by the LAMMPS `molecule` command and used with `fix clump/rigid`

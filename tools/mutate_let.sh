@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 # Mutation checks of the locally essential tree's conditions (doc/design.md, "MPI"): each
 # mutation of src/KIFMM/engine/distributed.cpp must make some engine distributed test fail.
 #   git worktree add ../kifmm-mutate HEAD && WT=../kifmm-mutate bash tools/mutate_let.sh

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 # README command (a): install what is missing, build, run the default example (charges-box,
 # quick variant) with lmp_kifmm, plot its energy, and say where the outputs are.
 set -euo pipefail

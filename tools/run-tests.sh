@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 # README command (b): install what is missing, build, run the engine's unit tests in an
 # AddressSanitizer + UndefinedBehaviorSanitizer build, then the whole test suite with ctest
 # (MPI tests run under mpirun --oversubscribe; root is allowed through OMPI's variables), then

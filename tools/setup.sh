@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 # Installs what lammps-kifmm needs from Debian's packages, only what is missing.
 # Idempotent and non-interactive; used by both README commands and by CI.
 set -euo pipefail

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 # valgrind memcheck of a short lmp_kifmm run with kspace kifmm, fix kifmm/stride and
 # fix clump/rigid (bench/soak/in.soak, small: 20 dipole clumps + 10 charged spheres, 200
 # steps, then write_restart, clear, read_restart, 100 more steps with the restored clumps and

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Strong-scaling benchmark of the distributed evaluation (engine level, no LAMMPS):
 //   mpirun -np P bench_scaling N [uniform|periodic|plummer] [order] [reps] [top_level] [choice]
 // Each rank makes only its own points: uniform in its brick of a P-brick decomposition of

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 """Fit the cost model of doc/scaling.md to bench/scaling/results/scaling.jsonl and print it.
 
     python3 bench/scaling/model.py [results.jsonl]

@@ -1,4 +1,5 @@
 #!/bin/bash
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 # Strong scaling of the distributed evaluation (doc/scaling.md):
 #   bash bench/scaling/run_scaling.sh [build dir] [max N]
 # 1 and 2 ranks x 1 and 2 threads at N = 1e5 and 1e6 (uniform, order 6, 3 timed evaluations

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 """Soak run: runs in.soak with lmp_kifmm and checks its invariants.
 
     python3 bench/soak/run_soak.py [--steps 100000] [--segments 10] [--lmp build/lmp_kifmm]

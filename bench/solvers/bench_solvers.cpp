@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // bench_solvers: one step of the speed-versus-error comparison of long-range solvers
 // (kspace kifmm, LAMMPS msm, direct summation; ewald/pppm for periodic cases) on the same
 // atoms, in an in-process LAMMPS instance. Driven by run_bench.py (see run.sh, README.md).

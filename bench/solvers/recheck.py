@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 """Re-measure stored runs of the campaign: the same bench_solvers command on the same data and
 reference files as run_bench.py (the work directory of the campaign), appended as kind
 "recheck" to a side file (results/recheck-COMMIT.jsonl) that report.py compares with the

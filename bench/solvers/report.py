@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 """Report: tables (markdown) and plots (PNG) from the results of run_bench.py.
 
 Matched-error times: each solver's runs on one case and N form its Pareto front (runs not

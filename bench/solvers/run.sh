@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 # Speed-versus-error report of the long-range solvers (kspace kifmm, LAMMPS msm, ewald, pppm,
 # direct sum): builds bench_solvers, measures (run_bench.py, resumable), writes the summary
 # page, the full tables and the plots (report.py).

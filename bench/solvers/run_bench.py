@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 """Measure: run the cases of one profile of cases.json with bench_solvers, one child process
 per solver run (so that each run's peak memory is its own), and append one JSON line per run
 to the results file. Runs already in the results file are skipped (the campaign can be

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 """Snapshots of the example scenes (start and end states) for the solver benchmark.
 
 Each scene of examples/ is copied into WORK/scenes/NAME/ (the examples themselves are not

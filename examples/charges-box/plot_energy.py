@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 """Plot the charges-box energies from out/energy.dat (written by in.charges-box).
 
 Normalized as the source paper does: t_hat = t / T_max and U_hat = U / U_ref with

@@ -1,3 +1,4 @@
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 """Shared part of the example scenes' plot_energy.py scripts: matplotlib set-up, reading of
 out/energy.dat, the figure with the paper's normalization (t_hat = t / T_max, U_hat = U /
 U_ref) and its long-range energy panel, and saving out/energy.png.

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 """Write the platelet molecule file of this scene: two hexagonal layers of 1 + 3n(n-1) pebbles
 each, the upper layer directly above the lower one (AA stacking, layer distance = pebble
 spacing), lower layer +q, upper layer -q. The platelet's dipole moment is then exactly along

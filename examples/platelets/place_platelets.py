@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 """Random, non-overlapping, co-oriented placement of platelets; writes LAMMPS commands.
 
 Each platelet is a hexagonal two-layer clump whose normal is z (as in the molecule file); all

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 """Run the quick variant of the platelets scene from several random starts and tabulate the
 outcome the ctest asserts (unittest/examples/check_platelets.py) for each.
 

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // fix ID all kifmm/stride N|auto [mode hold|impulse] [energy last|every] [kdem K] [nmax M]
 //
 // Multiple time stepping for kspace_style kifmm: the long-range forces are evaluated on steps

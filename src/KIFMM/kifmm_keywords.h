@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // The settings of kspace_style kifmm and the parser of its `kspace_modify kifmm ...` keywords.
 // Pure C++ (no LAMMPS), so that it is unit-tested and fuzzed on its own; the kspace style turns
 // a parse error into a LAMMPS error naming the bad token.

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Rigid bodies whose internal pairs kspace_style kifmm leaves out of the long-range sum.
 //
 // The pebbles of one rigid clump keep their distances: the forces between them cancel in the

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Time spent by kspace_style kifmm during a run, by phase, and its end-of-run table
 // (min/avg/max over ranks, like LAMMPS's own timing breakdown). The table is printed by an
 // internal fix (ID KIFMM_TIMING) that the kspace style creates, because fixes are what LAMMPS

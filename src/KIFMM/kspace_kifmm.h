@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // kspace_style kifmm: the full long-range sum (no real-space split) by the KIFMM engine.
 // Kernels: coulomb (atom q, qqrd2e), gravity (mass, G, attractive), yukawa (screened coulomb
 // as pair coul/debye). Open boundaries, or p p p with a cubic box (kspace_kifmm_periodic.cpp). Thin adapter: collects the atoms of nonzero strength,

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // kspace_style kifmm and rigid bodies (fix clump/rigid, through KIFMMRigidBodies): the pairs
 // inside one body are left out of the long-range sum, as `neigh_modify exclude molecule/intra`
 // leaves them out of a pair style. Their forces cancel in the body's net force and torque and

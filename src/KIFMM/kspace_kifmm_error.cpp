@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Measured error of kspace_style kifmm: the evaluated forces of a random sample against the
 // exact sum (open: direct sum over all atoms; periodic: Ewald sum), on what the integrator uses:
 // the forces of free atoms, and the net force and torque of each rigid clump (fix clump/rigid;
@@ -307,6 +308,26 @@ void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::s
     m = kept_m;
     break;
   }
+  // another order than the run started with: the tree for that order (one rank, leaf not
+  // given), measured too; raised again if that tree does not meet the target
+  if (engine_options.order != first_order && kset.leaf <= 0 && !distributed()) {
+    const int leaf = engine_options.leaf_size, grid = engine_options.periodic_grid;
+    choose_tree_from_atoms();
+    if (engine_options.leaf_size != leaf || engine_options.periodic_grid != grid) {
+      evaluate_points(want_potential, comm_time, nsrc);
+      m = measure_error(nsamples);
+      while (m.worst() > target && engine_options.order < kifmm::max_calibrated_order()) {
+        const int from = engine_options.order;
+        const double was = m.worst();
+        m = use_order(from + 1, engine->options());
+        if (comm->me == 0)
+          utils::logmesg(lmp,
+                         "  KIFMM order {} on its tree measured {:.3e} > {:.3g}: order {} measured "
+                         "{:.3e} ({})\n",
+                         from, was, target, engine_options.order, m.worst(), m.describe());
+      }
+    }
+  }
   verified_error = m.worst();
   chosen_order = engine_options.order;
   if (comm->me == 0) {
@@ -319,6 +340,4 @@ void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::s
       utils::logmesg(lmp, "  KIFMM order {}: measured relative error {:.3e} ({}), requested {:.3g}\n",
                      engine_options.order, m.worst(), m.describe(), kset.accuracy);
   }
-  // another order than the run started with: the tree for that order (one rank, leaf not given)
-  if (engine_options.order != first_order && kset.leaf <= 0 && !distributed()) choose_tree_from_atoms();
 }

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Periodic boundaries of kspace_style kifmm (boundary p p p, cubic box): checks at init, the
 // periodic cell handed to the engine at every evaluation (boxes that change size), the
 // virial. The lattice sums themselves are in the engine (engine/periodic.h).

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Small dense linear algebra for fix clump/rigid (no LAMMPS dependency): symmetric
 // eigen-decomposition (cyclic Jacobi), best-fit rotation of two point sets (Horn's
 // quaternion method), rigid-motion fit of velocities, quaternion helpers.

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Checks of the pebbles of a clump (a molecule template's Coords and Diameters, or the pebbles
 // of one clump of atoms) before the union mass properties are integrated. No LAMMPS
 // dependency: fix clump/rigid calls it, and the libFuzzer target fuzz/fuzz_clump_template.cpp

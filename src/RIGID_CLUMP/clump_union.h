@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Mass properties of a union of (possibly overlapping) spheres at uniform density.
 // No LAMMPS dependency; used by fix clump/rigid and tested on its own.
 //

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // fix clump/rigid: rigid clumps of (charged) spherical pebbles. See doc/fix_clump_rigid.rst.
 //
 // Composition, not a new integrator: the fix owns an internal `rigid/small` (or

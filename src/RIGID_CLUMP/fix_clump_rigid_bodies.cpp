@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // fix clump/rigid as KIFMMRigidBodies: the pebbles of every clump gathered on one rank
 // (LAMMPS's rendezvous communication, clump ID -> rank), their pair sums computed there in the
 // body frame and sent back to the pebbles' owners; the pebble count of every clump checked

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // The parts of LAMMPS that the package reads beyond LAMMPS's public style interface, for both
 // ways of building it:
 //  - against a LAMMPS source tree (KIFMM_LAMMPS_TREE = 1, CMake option LAMMPS_SOURCE_DIR): the

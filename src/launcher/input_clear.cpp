@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // lmp_kifmm's definition of LAMMPS's `clear` command.
 //
 // `clear` destroys and recreates Force, Modify, Domain, ... and with them the style maps, so

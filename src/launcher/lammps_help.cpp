@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // lmp_kifmm's definition of LAMMPS::help(), the -h output.
 //
 // LAMMPS prints its help from inside its constructor and then ends the process, so lmp_kifmm

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // lmp_kifmm: Debian's `lmp` with the lammps-kifmm styles built in and a `plugin` command.
 // Takes exactly the command-line flags of `lmp` (argv goes to LAMMPS unchanged).
 #include "plugin_registry.h"

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // The per-process registry of styles loaded from plugin shared objects, behind lmp_kifmm's
 // `plugin load|unload|list|clear|restore` command. As in LAMMPS, plugins are a property of
 // the executable: they stay loaded across `clear` and are restored into the new style maps.

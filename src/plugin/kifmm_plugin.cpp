@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Entry points of kifmmplugin.so.
 //  - lammpsplugin_init: the standard LAMMPS plugin entry (`plugin load kifmmplugin.so` in a
 //    plugin-enabled LAMMPS, or in lmp_kifmm).

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // The styles of the lammps-kifmm package, in LAMMPS plugin form: one table shared by
 // kifmmplugin.so (lammpsplugin_init), lmp_kifmm (built-in styles) and the Python entry point.
 #pragma once

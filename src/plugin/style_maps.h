@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Putting a style (in LAMMPS plugin form) into, and taking it out of, the style maps of a
 // LAMMPS instance (Force, Modify, Domain, Input). Used by lmp_kifmm for its built-in styles
 // and for the `plugin` command, and by kifmmplugin.so's Python entry point.

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 """Checks of the bench_smoke test on the output of `run.sh --tiny` (open and periodic cases):
 the report has the runs table of every case with finite errors, kifmm's error falls as the
 requested accuracy is tightened, the exact solvers agree with the reference, and the ratio

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 # bench_smoke: run the solver benchmark driver on its tiny profile into a fresh directory,
 # then check the report. Usage: smoke.sh BENCH_SOLVERS_BINARY OUTDIR
 set -euo pipefail

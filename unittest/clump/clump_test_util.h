@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Shared helpers of the fix clump/rigid tests: the standard box, molecule files written on the
 // fly, and the per-clump rows of compute rigid/local "<fix-ID>_local" gathered over ranks.
 #pragma once

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // kspace_style kifmm with the rigid clumps of fix clump/rigid: the pairs inside a clump are left
 // out of the long-range sum (forces, energy, virial, per-atom values equal LAMMPS's own pair
 // coul/cut over the same clumps, whose intra-clump pairs fix clump/rigid excludes), also with

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // fix clump/rigid in parallel equals serial: the same granular system of clumps (pair
 // gran/hooke/history between clumps, a damped granular wall, a uniform field on charged
 // pebbles, clumps straddling the processor boundary) is run on MPI_COMM_WORLD and, on every

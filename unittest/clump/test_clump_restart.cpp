@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // fix clump/rigid and restart / data files:
 //  - a run split by write_restart / read_restart equals the unsplit run: bit for bit on one
 //    rank, to 1e-12 on two (registered twice: serial and mpirun -np 2). The system has clumps

@@ -1,3 +1,4 @@
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 """tools/clump_shapes.py: pebble counts, geometry, charges, duplicates, and the committed
 shape files in potentials/ equal the generator's output."""
 import importlib.util

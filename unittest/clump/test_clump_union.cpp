@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Union-of-spheres mass properties (no LAMMPS): single sphere, two overlapping spheres against
 // the exact lens / solid-of-revolution formulas, disjoint and nested spheres, rotation
 // invariance, duplicate detection; the small linear algebra of fix clump/rigid.

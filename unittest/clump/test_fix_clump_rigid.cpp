@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // fix clump/rigid through the in-process LAMMPS fixture: union masses of created, deposited
 // and read clumps, the masses the granular pair and wall styles use, intra-clump exclusion,
 // initial motion, torque-free rotation (energy, angular momentum, intermediate axis), a dipole

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 """The package's force-style references (force-styles/kspace-kifmm_*_open.yaml, generated with
 LAMMPS's test_pair_style) against an exact direct sum of the same physics over data.kifmm:
 coulomb q_i q_j / r, gravity -G m_i m_j / r, yukawa q_i q_j exp(-kappa r) / r (lj units,

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 """The plugin in a current LAMMPS (a LAMMPS built from its sources, `plugin load`), against
 lmp_kifmm (Debian's LAMMPS with the styles built in) and against itself on two ranks.
 
@@ -12,6 +13,10 @@ cases:
   clumps   fix clump/rigid with a molecule template, fix pour (rigid keyword) and the gravity
            keyword, charged pebbles under kspace kifmm: 5 clumps inserted with the union mass,
            the mean clump velocity gains exactly -g N dt per run of N steps
+  restart  clumps (three templates, one given by an infile of mass properties) with kspace
+           kifmm, fix kifmm/stride 5 and the gravity keyword: a run split by write_restart /
+           read_restart (a new process) at step 23 equals the unsplit run of 40 steps bit for
+           bit; the infile clump has the infile's mass
   python   the same kifmm input through that LAMMPS's own Python module (--pythonpath, the
            directory of its liblammps.so: --libdir): energy equal to the lmp run's
 Exit status 0 on success; prints what was compared.
@@ -80,6 +85,40 @@ run 200
 print "VZ1 $(v_vz:%.17g)"
 run 400
 print "VZ2 $(v_vz:%.17g)"
+"""
+
+
+RESTART_SETUP = """\
+units si
+atom_style hybrid sphere charge
+atom_modify map array sort 0 0.0
+boundary f f f
+fix prop all property/atom mol ghost yes
+region box block -0.2 0.2 -0.2 0.2 -0.2 0.2
+create_box 2 box
+mass * 1.0
+comm_modify cutoff 0.05 vel yes
+neighbor 0.002 bin
+molecule dip {potentials}/dipole3.mol
+create_atoms 0 single -0.05 0.00 0.01 mol dip 11 rotate 30 0 0 1
+create_atoms 0 single  0.03 0.02 -0.02 mol dip 12 rotate 70 1 0 0
+create_atoms 0 single  0.00 -0.04 0.03 mol dip 13 rotate 120 0 1 1
+variable qq atom 1e-6*q
+set group all charge v_qq
+variable vx atom 0.3*sin(40*x)
+variable vy atom 0.2*cos(30*y)
+velocity all set v_vx v_vy -0.1
+"""
+
+RESTART_FORCES = """\
+pair_style zero 0.02
+pair_coeff * *
+timestep 1e-4
+group nothing empty
+fix grav nothing gravity 9.81 vector 0 0 -1
+kspace_style kifmm 1e-6
+fix st all kifmm/stride 5
+thermo_style custom step
 """
 
 
@@ -160,12 +199,12 @@ def compare(a, b, tol, what):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("case", choices=["kspace", "mpi", "clumps", "python"])
+    ap.add_argument("case", choices=["kspace", "mpi", "clumps", "restart", "python"])
     ap.add_argument("--lmp", required=True)
     ap.add_argument("--plugin", required=True)
     ap.add_argument("--reference", help="lmp_kifmm (kspace)")
     ap.add_argument("--mpirun", nargs="+", help="mpirun command and its options (mpi)")
-    ap.add_argument("--potentials", help="the package's potentials/ (clumps)")
+    ap.add_argument("--potentials", help="the package's potentials/ (clumps, restart)")
     ap.add_argument("--pythonpath", help="that LAMMPS's python/ directory (python)")
     ap.add_argument("--libdir", help="directory of that LAMMPS's liblammps.so (python)")
     a = ap.parse_args()
@@ -209,6 +248,43 @@ def main():
                 sys.exit("the clumps do not gain exactly -g N dt per run")
             if "KIFMM DONE" not in out or "ERROR" in out:
                 sys.exit("kspace kifmm on the poured clumps failed")
+        elif a.case == "restart":
+            d = os.path.join(work, "restart")
+            os.makedirs(d)
+            pot = os.path.abspath(a.potentials)
+            # clump 1 by an infile (mass 1.5e-3 kg, its own inertia); clumps 2, 3 at density 2500
+            with open(os.path.join(d, "bodies.txt"), "w") as f:
+                f.write("1\n1 1.5e-3 -0.05 0.0 0.01 4e-8 8e-8 8e-8 0 0 0 0.1 0.0 -0.1 0 0 0 0 0 0\n")
+            setup = RESTART_SETUP.format(potentials=pot)
+            clump = ("group one molecule 1\ngroup rest molecule 2 3\n"
+                     "fix c1 one clump/rigid infile bodies.txt gravity grav\n"
+                     "fix c2 rest clump/rigid density 2500 gravity grav\n")
+            dump = ("dump d all custom 40 final.*.dump id x y z vx vy vz\n"
+                    "dump_modify d format float %.17g sort id first no\n")
+            mass = "compute ms one reduce sum c_c1_local[3] inputs local\nthermo_style custom step c_ms\n"
+            with open(os.path.join(d, "in.unsplit"), "w") as f:
+                f.write(f"plugin load {plugin}\n" + setup + RESTART_FORCES + clump + mass + dump +
+                        "run 40\nprint \"MASS1 $(c_ms:%.15g)\"\n")
+            with open(os.path.join(d, "in.first"), "w") as f:
+                f.write(f"plugin load {plugin}\n" + setup + RESTART_FORCES + clump +
+                        "run 23\nwrite_restart split.restart\n")
+            with open(os.path.join(d, "in.second"), "w") as f:
+                f.write(f"plugin load {plugin}\nread_restart split.restart\n"
+                        "fix prop all property/atom mol ghost yes\n" + RESTART_FORCES + clump +
+                        dump.replace("final", "split") + "run 17\n")
+            out = run([a.lmp, "-in", "in.unsplit", "-log", "log.unsplit", "-nocite"], d)
+            run([a.lmp, "-in", "in.first", "-log", "log.first", "-nocite"], d)
+            run([a.lmp, "-in", "in.second", "-log", "log.second", "-nocite"], d)
+            m1 = float(re.search(r"^MASS1 (\S+)$", out, re.M).group(1))
+            print(f"infile clump mass {m1:.10g} (infile 1.5e-3)")
+            if abs(m1 - 1.5e-3) > 1e-12:
+                sys.exit("the infile clump does not have the infile's mass")
+            a1 = open(os.path.join(d, "final.40.dump")).read().split("ITEM: ATOMS")[1]
+            a2 = open(os.path.join(d, "split.40.dump")).read().split("ITEM: ATOMS")[1]
+            print(f"step 40, {len(a1.splitlines()) - 1} pebbles: split run {'equals' if a1 == a2 else 'differs from'}"
+                  " the unsplit one bit for bit")
+            if a1 != a2:
+                sys.exit("the run split by a restart differs from the unsplit run")
         else:
             d1, out = kspace_dir([a.lmp], plugin, work, "lmp")
             e_lmp = float(re.search(r"^ELONG (\S+)$", out, re.M).group(1))

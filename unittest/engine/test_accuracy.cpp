@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // FMM vs direct sum: relative L2 errors of potential and gradient.
 #include "test_util.h"
 

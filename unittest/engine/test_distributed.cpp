@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Distributed evaluation (Evaluator::evaluate_distributed over MPI) equals the serial
 // evaluation of all points to 1e-10 relative, for uniform, clustered and dipole sets, several
 // partitions (slabs with an empty rank, spatial blocks, random, everything on one rank) and top

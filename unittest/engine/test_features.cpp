@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Engine behaviour: coincident points, separate sets, zero strengths, gradient-only path,
 // thread independence, mutual near field (sources = targets), operator disk cache, a user
 // kernel, choose_order, fixed root box.

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Kernel pair functions and the direct sum against plain scalar references.
 #include "direct_sum.h"
 #include "kernels.h"

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Periodic boundaries of the engine (periodic.h): lattice sums, periodic lists, FMM against
 // the Ewald reference sum, wrapping, scaling with the cell size.
 #include "periodic.h"

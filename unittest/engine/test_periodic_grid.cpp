@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Periodic single-level grid (periodic_grid.h): against the Ewald reference sum and against
 // the periodic octree, mutual against one-sided near field, background term, wrapping,
 // coincident points, threads, the choice of the cost model, bad input.

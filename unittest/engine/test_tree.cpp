@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Octree and interaction-list tests (no expansions involved).
 #include "interaction_lists.h"
 #include "morton.h"

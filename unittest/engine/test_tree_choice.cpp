@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Tree choice per N and boundary (cost_model.h, choose_tree in kifmm.h): the counts of the cost
 // model against the interaction lists of real trees, the depth the chosen leaf size gives on
 // uniform points, and the accuracy of evaluations with the chosen trees (open: direct sum;

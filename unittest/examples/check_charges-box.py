@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 """Check the outcome of examples/charges-box from its outputs (out/final.dump).
 
 Asserts: the fraction of spheres whose centre is within 2r of a wall

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 """Check the outcome of examples/gravity-collapse from its outputs.
 
 Asserts: the radius of gyration falls by more than 3x (first row of

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 """Stability of a nested stack of platelets with the platelets scene's contact model and time
 step (examples/platelets/parameters.lmp), for one variant (--quick 1 or 0).
 

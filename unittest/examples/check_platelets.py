@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 """Check the outcome of examples/platelets from its outputs (out/pebbles.dump).
 
 Asserts: the platelet normals stay aligned (nematic order parameter

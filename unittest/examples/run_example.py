@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 """Run the quick variant of one example scene in a temporary copy of its directory, then its
 outcome checker on the outputs.
 

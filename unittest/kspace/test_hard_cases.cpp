@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Hard cases and bad input for kspace_style kifmm: empty and tiny systems, everything at one
 // point, coincident atoms, non-finite charges, memory refusal, high orders.
 #include "configurations.h"

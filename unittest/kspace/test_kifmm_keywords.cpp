@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // The keyword parser of kspace_style kifmm / kspace_modify kifmm (no LAMMPS needed).
 #include "kifmm_keywords.h"
 

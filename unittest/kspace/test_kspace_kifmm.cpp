@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // kspace_style kifmm in LAMMPS against exact references computed by LAMMPS itself:
 // pair coul/cut (and coul/debye) with a cutoff larger than the box under boundary f f f is an
 // exact direct sum of the same physics.

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 """The on-disk operator cache across processes: KIFMM_CACHE_DIR names a directory that does not
 exist. The first lmp_kifmm run creates it, computes the operators and writes them there; the
 second run (a new process, so an empty in-memory cache) reads them back.

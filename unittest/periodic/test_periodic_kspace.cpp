@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // kspace_style kifmm with boundary p p p against LAMMPS's kspace_style ewald (tin-foil).
 //
 // Reference: LAMMPS ewald's k-space part (forces, and energy with its self and net-charge

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Creating, clearing and re-creating LAMMPS instances with kifmm running, and loading and
 // unloading plugins, 100 times in one process: resident memory must stay flat.
 #include "lammps_fixture.h"

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // A LAMMPS plugin built only for the tests (kifmm_test_plugin.so). It provides two small,
 // honest styles that exercise the plugin ABI and the fmt-formatted LAMMPS calls:
 //   command kifmm_test_hello N   : logs "kifmm_test_hello: hello N times" (N >= 0), or fails

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // In-process tests of the plugin registry behind lmp_kifmm's `plugin` command, of the fmt
 // compatibility (formatted LAMMPS messages from a plugin style) and of the package table.
 #include "lammps_fixture.h"

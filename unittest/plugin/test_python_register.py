@@ -1,3 +1,4 @@
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 """python3-lammps + lammps_kifmm.register: the package styles work from Python."""
 import math
 import sys

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Shared input of the fix kifmm/stride tests: a small cube of +-1 charges (edge^3 atoms, default 125, in rock-salt
 // order on a slightly disordered simple cubic lattice, unit spacing, net charge +1 for odd edge) in a fixed open box.
 #pragma once

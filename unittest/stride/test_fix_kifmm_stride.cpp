@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // fix kifmm/stride: schedule (hold, impulse, energy last/every), N = 1 equals no fix bit for
 // bit, restart split, cache through sort/delete/insert, clumps (fix rigid/small) receive the
 // held forces, stiffness probe and recommended N, errors, NVE drift table.

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // fix kifmm/stride on 2 MPI ranks: the held forces move with their atoms across the processor
 // boundary (exchange, sort, reneighboring on every step), the trajectory equals the serial
 // one, and a restart split on 2 ranks equals the unsplit run. Run with mpirun -np 2.

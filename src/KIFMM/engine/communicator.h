@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Communication interface of the distributed evaluation (Evaluator::evaluate_distributed).
 // The engine has no MPI dependency: the MPI implementation is mpi_communicator.h/.cpp
 // (library kifmm_engine_mpi); SerialCommunicator is the one-process case. Every call is

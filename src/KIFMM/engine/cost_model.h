@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Cost model of one evaluation (potential + gradient, one thread, sources = targets) on n
 // points spread uniformly over the root cube, as a function of the tree depth d: a full tree
 // of 8^d leaves with m = n / 8^d points each. Counts (exact for the full tree, expected values

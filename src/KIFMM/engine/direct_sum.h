@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Templated exact O(N*M) sum (OpenMP over target blocks, vectorized p2p over source chunks);
 // the non-template entry kifmm::direct_sum (kifmm.h) dispatches on KernelSpec.
 #pragma once

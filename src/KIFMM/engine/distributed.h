@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Distributed evaluation, the part that does not depend on the kernel: global root and top
 // tree from reductions, frontier cells, who holds what, and the import of ghost points
 // (doc/design.md, "MPI: distributed evaluation"). Used by FmmEvaluator::evaluate_distributed.

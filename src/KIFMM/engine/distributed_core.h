@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // FmmEvaluator<K>::evaluate_distributed (included at the end of fmm_core.h). The parts that
 // do not depend on the kernel (root, top tree, whole-cell imports, the locally essential
 // trees' requests and answers) are distributed.h/.cpp; here: when some rank needs a LET, a first

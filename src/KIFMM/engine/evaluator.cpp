@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // make_evaluator: runtime switch from KernelSpec to the templated core (fmm_core.h).
 #include "fmm_core.h"
 #include "kernels.h"

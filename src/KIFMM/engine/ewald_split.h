@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Ewald split of the lattice sum of the unit cell (half-width 1, period 2) for the Laplace
 // (tin-foil, k = 0 omitted, uniform background) and Yukawa kernels: real-space terms with
 // erfc, reciprocal weights, background constant (internal to periodic.cpp and

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Templated FMM core: FmmEvaluator<Kernel> implements kifmm::Evaluator for any kernel type
 // following kernels.h (tests instantiate it with their own kernel). Passes:
 //   tree (octree.h) -> lists (interaction_lists.h) -> operators (operator_cache.h) ->

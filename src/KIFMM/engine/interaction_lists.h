@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Adaptive interaction lists (Ying, Biros, Zorin 2004) for a target cell B:
 //   U(B)  (B leaf)  source leaves adjacent to B, B itself included          -> P2P
 //   V(B)            children of the colleagues of parent(B) not adjacent to B -> M2L

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // How a kernel's operators depend on the box size (level): detects the optional members
 // described in kernels.h and produces, for a box of half-width h, the unit-box kernel
 // (as a plain function of r2 in unit coordinates, plus a cache id) and the scale s with

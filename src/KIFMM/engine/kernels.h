@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Kernel types of the engine. A kernel is a small value type with its pair evaluation:
 //
 //   double value(double r2, double invr) const;                      G(r)

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Public interface of the KIFMM engine (namespace kifmm, no LAMMPS dependency).
 //
 // Conventions (stated once, here):

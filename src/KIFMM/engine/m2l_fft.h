@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // M2L as a convolution on the regular (2p)^3 lattice (FFTW r2c/c2r).
 //
 // The upward-equivalent surface of a source cell and the downward-check surface of a target

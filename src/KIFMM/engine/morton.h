@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // 64-bit Morton keys: 21 bits per axis interleaved (x in the lowest bit of each triple).
 // A cell at level l is identified by the pair (level, prefix) where prefix = key >> 3(21-l);
 // level_key() packs both into one 64-bit value with a leading 1 bit (1 << 3l) | prefix, the

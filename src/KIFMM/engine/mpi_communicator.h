@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // kifmm::Communicator over an MPI communicator (library kifmm_engine_mpi; the engine itself
 // does not depend on MPI). Counts of more than INT_MAX elements are refused (exception).
 // It works on a duplicate of the given communicator (its own tag space). alltoallv is a sparse

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Task schedule of a mutual near field (p2p_mutual.h): each node (leaf or grid cell) with
 // itself, then the pairs of adjacent nodes, one OpenMP task each, with a dependence on each
 // of its nodes: tasks that share a node run in creation order (a fixed order per target, so

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Adaptive octree over sources and targets (separate point sets, one tree).
 //
 // Points get their 63-bit Morton key; cells are made top down, level by level: a cell that

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Process-wide cache of operator sets, keyed by (unit kernel id, order), thread-safe (least
 // recently used sets are dropped beyond 1 GiB; evaluators keep the sets they use), with an
 // optional on-disk copy: <cache_dir>/kifmm_ops_v<version>_<id>_p<order>.bin. A file is used

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Precomputed translation operators of one unit box (half-width 1, center 0) for one unit
 // kernel (kernel_scaling.h) and order p. Physical use at half-width h with scale s
 // (G(h u) = s G_unit(u)):

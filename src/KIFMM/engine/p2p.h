@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Near-field particle-to-particle kernel loop (templated on the kernel so the pair function
 // inlines). Structure of arrays; for each target, the loop over sources is an OpenMP SIMD
 // reduction (vectorized, deterministic for a given build). Pairs with r2 == 0 are masked:

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Mutual (Newton's third law) near-field kernel: one pass over the pairs of two point sets that
 // are both sources and targets gives the potential and gradient on both sides. Used by the
 // periodic near field when sources and targets are the same points (periodic_core.h): each

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Periodic boundaries (all three dimensions, cubic cell), PVFMM-style:
 //  * the tree root is the periodic cell (Options::fixed_root; points are wrapped into it);
 //  * interaction lists wrap at every level: the colleague of cell B at offset d is the cell at

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Periodic passes of FmmEvaluator<K> (included at the end of fmm_core.h; see periodic.h):
 //   periodic_wrap : points wrapped into the cell (the fixed root)
 //   periodic_far  : image X entries (P2L with shifted check surfaces) and the root's far-image

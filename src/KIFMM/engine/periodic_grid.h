@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Periodic (p p p) evaluation on ONE level of k^3 cubic cells (k >= 3 per side), the cheaper
 // choice for small N (about 1e3 .. 3e4 atoms, see cost_model.h): the octree's 4 or 8 leaves
 // per side leave either too many atoms per leaf (near field) or too many M2L translations;

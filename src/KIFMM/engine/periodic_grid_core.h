@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Periodic evaluation on one level of k^3 cells: FmmEvaluator<K>::evaluate_grid (included at
 // the end of fmm_core.h; the method is described in periodic_grid.h). Points are already
 // wrapped into the cell (the fixed root). Passes: bin -> P2M -> surface FFTs -> convolution

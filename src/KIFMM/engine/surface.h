@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Equivalent / check surfaces: the boundary points of a regular p x p x p grid on a cube.
 // Unit box: center 0, half-width 1; the surface of radius factor alpha has its points at
 // alpha * (-1 + 2 i/(p-1)) per axis, i = 0..p-1, keeping those with an index on the boundary

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Base class of LAMMPS input-script commands (CommandStyle). Debian's liblammps-dev does not
 // ship command.h; this declares the identical interface of LAMMPS 29Sep2021 (a Pointers-based
 // class with one pure virtual `command`), which is all a command style needs.

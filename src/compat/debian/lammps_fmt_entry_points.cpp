@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Definitions of LAMMPS's fmt-taking entry points for Debian's fmt 9 types.
 //
 // liblammps exports these functions only for its private fmt 7 (fmt::v7_lmp) types, so calls

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // The LAMMPS plugin ABI (C linkage), as used by LAMMPS releases from 2022 on, where kspace
 // styles are registrable too. Debian's liblammps-dev does not ship lammpsplugin.h; this is
 // our declaration of the same binary interface so that kifmmplugin.so loads into any

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Declaration of the data members of LAMMPS's Molecule class (a molecule template), as laid
 // out in LAMMPS 29 Sep 2021 (Debian's liblammps-dev, which does not ship molecule.h), for fix
 // clump/rigid built against Debian's LAMMPS (a source tree's own molecule.h is used otherwise;

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Declaration of the data members of LAMMPS's FixRigidSmall, as laid out in LAMMPS 29 Sep 2021
 // (Debian's liblammps-dev, which does not ship fix_rigid_small.h), for fix clump/rigid built
 // against Debian's LAMMPS (a source tree's own RIGID/fix_rigid_small.h is used otherwise; both

@@ -1,3 +1,4 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Shim for LAMMPS 29Sep2021 headers on Debian.
 //
 // Debian's liblammps-dev includes "fmt/format.h" without shipping it; the library itself was

@@ -270,16 +270,20 @@ void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::s
     evaluate_points(want_potential, comm_time, nsrc);
     return measure_error(nsamples);
   };
-  while (m.worst() > target && engine_options.order < kifmm::max_calibrated_order()) {
-    const int from = engine_options.order;
-    const double was = m.worst();
-    m = use_order(from + 1, engine->options());
-    if (comm->me == 0)
-      utils::logmesg(lmp,
-                     "  KIFMM order {} measured {:.3e} on these atoms > {:.3g} (3/4 of the "
-                     "request): order {} measured {:.3e} ({})\n",
-                     from, was, target, engine_options.order, m.worst(), m.describe());
-  }
+  // the next order while the target is missed
+  auto raise_order = [&]() {
+    while (m.worst() > target && engine_options.order < kifmm::max_calibrated_order()) {
+      const int from = engine_options.order;
+      const double was = m.worst();
+      m = use_order(from + 1, engine->options());
+      if (comm->me == 0)
+        utils::logmesg(lmp,
+                       "  KIFMM order {} measured {:.3e} on these atoms > {:.3g} (3/4 of the "
+                       "request): order {} measured {:.3e} ({})\n",
+                       from, was, target, engine_options.order, m.worst(), m.describe());
+    }
+  };
+  raise_order();
   // a lower order may meet the target too (the calibration's errors are upper bounds for most
   // atom sets): tried while the error is below half the target, kept if it meets the target
   while (engine_options.order <= first_order && engine_options.order > min_tried_order &&
@@ -316,16 +320,7 @@ void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::s
     if (engine_options.leaf_size != leaf || engine_options.periodic_grid != grid) {
       evaluate_points(want_potential, comm_time, nsrc);
       m = measure_error(nsamples);
-      while (m.worst() > target && engine_options.order < kifmm::max_calibrated_order()) {
-        const int from = engine_options.order;
-        const double was = m.worst();
-        m = use_order(from + 1, engine->options());
-        if (comm->me == 0)
-          utils::logmesg(lmp,
-                         "  KIFMM order {} on its tree measured {:.3e} > {:.3g}: order {} measured "
-                         "{:.3e} ({})\n",
-                         from, was, target, engine_options.order, m.worst(), m.describe());
-      }
+      raise_order();
     }
   }
   verified_error = m.worst();

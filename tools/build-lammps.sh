@@ -33,7 +33,8 @@ settings=(-D CMAKE_BUILD_TYPE=Release -D CMAKE_CXX_FLAGS_RELEASE="-O1 -DNDEBUG"
   -D PKG_EXTRA-FIX=on -D PKG_GRAPHICS=on -D PKG_DIPOLE=on -D FFT=FFTW3 -D ENABLE_TESTING=on)
 targets=(lmp test_pair_style test_fix_timestep)
 key=$( (sha256sum < "$tarball"; echo "${settings[*]} ${targets[*]}") | sha256sum | cut -c1-16)
-cache="${KIFMM_LAMMPS_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/lammps-kifmm/lammps}"
+home="${HOME:-$(getent passwd "$(id -u)" | cut -d: -f6)}"
+cache="${KIFMM_LAMMPS_CACHE:-${XDG_CACHE_HOME:-${home:-/var/tmp}/.cache}/lammps-kifmm/lammps}"
 dir="$cache/$key"
 if [ -f "$dir/build.done" ]; then
   echo "build-lammps: using the cached build of $(basename "$tarball")" >&2

@@ -53,7 +53,7 @@ if [ -n "$tree" ]; then
   current="${build}-current"
   cmake -S "$root" -B "$current" -DCMAKE_BUILD_TYPE=Release -DLAMMPS_SOURCE_DIR="$tree" \
         -DKIFMM_LAMMPS_BINARY_DIR="$lammps_bin" -DKIFMM_REFERENCE_LMP="$build/lmp_kifmm" >/dev/null \
-    && cmake --build "$current" -j "${KIFMM_JOBS:-$(nproc)}" \
+    && cmake --build "$current" -j "${KIFMM_JOBS:-$(nproc)}" --target kifmmplugin \
     && (cd "$current" && ctest --output-on-failure -j "${KIFMM_TEST_JOBS:-2}" -L current) || status=1
 else
   echo "== plugin in a current LAMMPS: skipped (no LAMMPS source tree: set LAMMPS_SOURCE_DIR=<lammps>/src" \

@@ -1,6 +1,7 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 #include "fix_clump_rigid.h"
 
+#include "clump_bodies.h"
 #include "clump_math.h"
 #include "clump_template.h"
 #include "clump_union.h"
@@ -42,26 +43,6 @@ constexpr int restart_size = 5;    // version, density, tol, state stored, clump
 const char *const LOCAL_COLUMNS =
     "id mol mass x y z xu yu zu vx vy vz fx fy fz tqx tqy tqz omegax omegay omegaz "
     "angmomx angmomy angmomz quatw quati quatj quatk inertiax inertiay inertiaz";
-
-Mat3 itensor_to_matrix(const double t[6])
-{
-  // LAMMPS order xx yy zz yz xz xy, off-diagonal entries are the tensor's own
-  Mat3 m;
-  m[0] = {t[0], t[5], t[4]};
-  m[1] = {t[5], t[1], t[3]};
-  m[2] = {t[4], t[3], t[2]};
-  return m;
-}
-
-void matrix_to_itensor(const Mat3 &m, double t[6])
-{
-  t[0] = m[0][0];
-  t[1] = m[1][1];
-  t[2] = m[2][2];
-  t[3] = 0.5 * (m[1][2] + m[2][1]);
-  t[4] = 0.5 * (m[0][2] + m[2][0]);
-  t[5] = 0.5 * (m[0][1] + m[1][0]);
-}
 
 // Collective: an error when another rigid-body fix (style rigid...) has atoms of the clump fix
 // `self` in its group (both would integrate them). `own_rigid` is the ID of self's internal
@@ -473,135 +454,17 @@ void FixClumpRigid::write_bodies_file()
 
   std::string errmsg;
   if (comm->me == 0) {
-    double t0 = MPI_Wtime();
-    const int natoms = total / NV;
-    std::vector<int> order(natoms);
-    for (int i = 0; i < natoms; ++i) order[i] = i;
-    std::sort(order.begin(), order.end(), [&](int a, int b) {
-      if (all[a * NV] != all[b * NV]) return all[a * NV] < all[b * NV];
-      return all[a * NV + 1] < all[b * NV + 1];
-    });
-    double rmax = 0.0;
-    for (int i = 0; i < natoms; ++i) rmax = std::max(rmax, all[i * NV + 8]);
-
-    struct Shape {
-      std::vector<Vec3> ref;    // pebble centres relative to their centroid
-      double spread;            // sum of |ref|^2 (rotation invariant, quick pre-check)
-      double mass, volume, rel_error;
-      Vec3 com;      // relative to the centroid
-      Mat3 inertia;  // about the COM
-    };
-    std::map<std::vector<long long>, std::vector<Shape>> cache;
-    int ncomputed = 0, nclumps = 0;
-    double worst_error = 0.0;
-    std::ostringstream out;
-    out.precision(17);
-    std::ostringstream lines;
-    lines.precision(17);
-
-    for (int start = 0; start < natoms && errmsg.empty();) {
-      int end = start;
-      const double mol = all[order[start] * NV];
-      while (end < natoms && all[order[end] * NV] == mol) ++end;
-      const int np = end - start;
-      std::vector<clump::Sphere> s(np);
-      std::vector<Vec3> x(np), v(np);
-      std::vector<long> labels(np);
-      std::vector<long long> key = {np};
-      double rmin = 1e300;
-      Vec3 g{0, 0, 0};
-      for (int k = 0; k < np; ++k) {
-        const double *a = &all[order[start + k] * NV];
-        labels[k] = (long) a[1];
-        for (int d = 0; d < 3; ++d) {
-          s[k].x[d] = a[2 + d];
-          x[k][d] = a[2 + d];
-          v[k][d] = a[5 + d];
-          g[d] += a[2 + d] / np;
-        }
-        s[k].r = a[8];
-        rmin = std::min(rmin, a[8]);
-        key.push_back(std::llround(a[8] / rmax * 1e9));
-      }
-      std::string why = clump::check_pebbles(s, labels);
-      if (!why.empty()) {
-        errmsg = fmt::format("clump (molecule ID) {}: {} (atom IDs)", (long) mol, why);
-        break;
-      }
-      std::vector<Vec3> rel(np);
-      double spread = 0.0;
-      for (int k = 0; k < np; ++k)
-        for (int d = 0; d < 3; ++d) {
-          rel[k][d] = x[k][d] - g[d];
-          spread += rel[k][d] * rel[k][d];
-        }
-      const double match = 1e-4 * rmin;    // rms distance for "same shape"
-
-      // reuse a computed shape if this clump is a rotated copy of it
-      double mass = 0.0, rel_error = 0.0;
-      Vec3 com{};
-      Mat3 inertia{};
-      bool found = false;
-      auto &candidates = cache[key];
-      for (const Shape &sh : candidates) {
-        // |sqrt(spread) - sqrt(sh.spread)| <= rms-fit residual * sqrt(np)
-        if (std::fabs(std::sqrt(spread) - std::sqrt(sh.spread)) > match * std::sqrt((double) np))
-          continue;
-        double rms;
-        Mat3 rot = clump::best_rotation(sh.ref, rel, rms);
-        if (rms > match) continue;
-        Vec3 c = clump::matvec(rot, sh.com);
-        for (int d = 0; d < 3; ++d) com[d] = g[d] + c[d];
-        inertia = clump::matmul(clump::matmul(rot, sh.inertia), clump::transpose(rot));
-        mass = sh.mass;
-        rel_error = sh.rel_error;
-        found = true;
-        break;
-      }
-      if (!found) {
-        std::vector<clump::Sphere> sl(s);
-        for (int k = 0; k < np; ++k)
-          for (int d = 0; d < 3; ++d) sl[k].x[d] = rel[k][d];
-        clump::MassProperties p = clump::union_mass_properties(sl, density, tol);
-        Shape sh;
-        sh.ref = rel;
-        sh.spread = spread;
-        sh.mass = p.mass;
-        sh.volume = p.volume;
-        sh.rel_error = p.rel_error;
-        sh.com = {p.com[0], p.com[1], p.com[2]};
-        sh.inertia = itensor_to_matrix(p.itensor);
-        candidates.push_back(sh);
-        ++ncomputed;
-        mass = p.mass;
-        rel_error = p.rel_error;
-        for (int d = 0; d < 3; ++d) com[d] = g[d] + sh.com[d];
-        inertia = sh.inertia;
-      }
-      worst_error = std::max(worst_error, rel_error);
-
-      // rigid motion of the pebbles: velocity of the COM and angular momentum L = I omega
-      Vec3 vcm, omega;
-      clump::fit_rigid_motion(x, v, com, vcm, omega);
-      Vec3 angmom = clump::matvec(inertia, omega);
-      double it[6];
-      matrix_to_itensor(inertia, it);
-      lines << (long) mol << ' ' << mass << ' ' << com[0] << ' ' << com[1] << ' ' << com[2]
-            << ' ' << it[0] << ' ' << it[1] << ' ' << it[2] << ' ' << it[5] << ' ' << it[4]
-            << ' ' << it[3] << ' ' << vcm[0] << ' ' << vcm[1] << ' ' << vcm[2] << ' '
-            << angmom[0] << ' ' << angmom[1] << ' ' << angmom[2] << " 0 0 0\n";
-      ++nclumps;
-      start = end;
+    const double t0 = MPI_Wtime();
+    std::vector<clump::Pebble> pebbles(total / NV);
+    for (std::size_t i = 0; i < pebbles.size(); ++i) {
+      const double *a = &all[i * NV];
+      pebbles[i] = {(long) a[0], (long) a[1], {a[2], a[3], a[4]}, {a[5], a[6], a[7]}, a[8]};
     }
+    const clump::BodiesResult r = clump::compute_bodies(std::move(pebbles), density, tol);
+    errmsg = r.error;
     if (errmsg.empty()) {
-      out << "# fix clump/rigid " << id << ": union-of-spheres mass properties at density "
-          << density << "\n"
-          << "# id mass xcm ycm zcm ixx iyy izz ixy ixz iyz vxcm vycm vzcm lx ly lz ixcm iycm "
-             "izcm\n"
-          << nclumps << "\n"
-          << lines.str();
       std::ofstream f(bodies_file);
-      f << out.str();
+      f << clump::bodies_file_text(r.bodies, id, density);
       f.close();
       if (!f)
         errmsg = fmt::format("cannot write the clump file {}", bodies_file);
@@ -609,7 +472,7 @@ void FixClumpRigid::write_bodies_file()
         utils::logmesg(lmp,
                        "fix clump/rigid {}: {} clumps, {} distinct shapes integrated, "
                        "estimated relative error of the union mass <= {:.2g}, {:.3f} s\n",
-                       id, nclumps, ncomputed, worst_error, MPI_Wtime() - t0);
+                       id, r.bodies.size(), r.shapes_integrated, r.worst_rel_error, MPI_Wtime() - t0);
     }
   }
   int len = (int) errmsg.size();

@@ -1,7 +1,6 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 #include "fix_kifmm_stride.h"
 
-#include "kspace_kifmm.h"
 
 #include "atom.h"
 #include "comm.h"
@@ -94,10 +93,6 @@ FixKIFMMStride::~FixKIFMMStride()
     atom->delete_callback(id, Atom::RESTART);
   }
   memory->destroy(cache);
-  // LAMMPS deletes force (and the kspace) before modify: force is null then
-  if (force && force->kspace)
-    if (auto *k = dynamic_cast<KSpaceKIFMM *>(force->kspace))
-      if (k->stride == this) k->stride = nullptr;
 }
 
 int FixKIFMMStride::setmask()
@@ -107,8 +102,8 @@ int FixKIFMMStride::setmask()
 
 void FixKIFMMStride::init()
 {
-  ks = dynamic_cast<KSpaceKIFMM *>(force->kspace);
-  if (!ks) error->all(FLERR, "fix kifmm/stride requires kspace_style kifmm");
+  if (!force->kspace_match("^kifmm", 0))
+    error->all(FLERR, "fix kifmm/stride requires kspace_style kifmm");
   if (utils::strmatch(update->integrate_style, "^respa"))
     error->all(FLERR,
                "fix kifmm/stride cannot be used with run_style respa (r-RESPA already "
@@ -117,7 +112,6 @@ void FixKIFMMStride::init()
   for (int i = 0; i < modify->nfix; ++i)
     if (strcmp(modify->fix[i]->style, style) == 0) ++count;
   if (count > 1) error->all(FLERR, "Only one fix kifmm/stride may be defined");
-  ks->stride = this;
 
   // contact stiffness: keyword, else whatever the pair style exports as "kn"
   if (kdem_source != "kdem keyword") {
@@ -187,7 +181,8 @@ void FixKIFMMStride::setup(int)
 // ---------------------------------------------------------------- schedule
 
 FixKIFMMStride::Action FixKIFMMStride::plan(bool want_global, bool want_peratom,
-                                             bool want_virial, double &energy, double *virial)
+                                             bool want_virial, double &energy, double *virial,
+                                             const std::function<bool(int)> &in_sum)
 {
   // minimization (and anything but dynamics): every call evaluates as without this fix
   if (update->whichflag != 1) return current = Action::Plain;
@@ -203,7 +198,7 @@ FixKIFMMStride::Action FixKIFMMStride::plan(bool want_global, bool want_peratom,
     // defined mid-simulation): evaluate now, off the schedule
     int mine = 0, any = 0;
     for (int i = 0; i < atom->nlocal && !mine; ++i)
-      if (cache[i][VALID] == 0.0 && ks->strength_of(i) != 0.0) mine = 1;
+      if (cache[i][VALID] == 0.0 && in_sum(i)) mine = 1;
     MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_MAX, world);
     if (any) {
       due = true;

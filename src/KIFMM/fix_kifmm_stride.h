@@ -5,29 +5,21 @@
 // that are multiples of N only. mode hold: in between, each atom gets its force of the last
 // evaluation again; mode impulse: N times the force on evaluation steps, nothing in between.
 // The kspace does the scheduling (it alone knows its forces apart from the others) by asking
-// this fix at each compute() call (plan()); the fix owns the per-atom cache, which LAMMPS moves
+// this fix at each compute() call (KIFMMForceSchedule::plan()); the fix owns the per-atom cache, which LAMMPS moves
 // with the atoms (exchange, sort, deletion) and writes to restart files, together with the
 // schedule state (last evaluation step, energy, virial). See doc/fix_kifmm_stride.rst.
 #pragma once
 
 #include "fix.h"
+#include "kifmm_force_schedule.h"
 
 #include <string>
 
 namespace LAMMPS_NS {
 
-class KSpaceKIFMM;
-
-class FixKIFMMStride : public Fix {
+class FixKIFMMStride : public Fix, public KIFMMForceSchedule {
  public:
   enum class Mode { Hold, Impulse };
-  // what one KSpaceKIFMM::compute() call does
-  enum class Action {
-    Plain,         // evaluate and apply as without this fix (minimization)
-    Evaluate,      // evaluate, apply force_scale() x the forces, store them in the cache
-    EnergyOnly,    // held forces applied by plan(); evaluate energy/virial, apply no forces
-    Skip           // held forces (or none) applied by plan(); last energy/virial reported
-  };
 
   FixKIFMMStride(class LAMMPS *, int, char **);
   ~FixKIFMMStride() override;
@@ -49,19 +41,18 @@ class FixKIFMMStride : public Fix {
   void write_restart(FILE *) override;
   void restart(char *) override;
 
-  // ---- called by KSpaceKIFMM::compute()
-  // Decides this call's action. For Skip and EnergyOnly in hold mode the held forces have
-  // been added to atom->f; for Skip, energy and (when want_virial) virial are set to the
-  // last evaluated values.
+  // ---- KIFMMForceSchedule: called by the kspace style's compute()
   Action plan(bool want_global, bool want_peratom, bool want_virial, double &energy,
-              double *virial);
-  double force_scale(Action a) const { return a == Action::Evaluate && mode == Mode::Impulse ? nevery : 1.0; }
+              double *virial, const std::function<bool(int)> &in_sum) override;
+  double force_scale(Action a) const override
+  {
+    return a == Action::Evaluate && mode == Mode::Impulse ? nevery : 1.0;
+  }
   // energy last: the kspace computes energy and virial on every evaluation, to report them on
   // the skipped steps (energy every evaluates them when they are wanted)
-  bool keeps_energy() const { return !energy_every && (nevery > 1 || auto_mode); }
-  void begin_evaluation();
-  // long-range force f of local atom i at position x (before force_scale())
-  void store(int i, const double *f, const double *x)
+  bool keeps_energy() const override { return !energy_every && (nevery > 1 || auto_mode); }
+  void begin_evaluation() override;
+  void store(int i, const double *f, const double *x) override
   {
     double *c = cache[i];
     if (measuring && c[X_REF] == c[X_REF]) {    // reference valid (not NaN)
@@ -79,14 +70,13 @@ class FixKIFMMStride : public Fix {
         c[X_REF + d] = x[d];
       }
   }
-  void end_evaluation(double energy, const double *virial);
+  void end_evaluation(double energy, const double *virial) override;
 
  private:
   // per-atom columns: held force, valid flag, reference position and force of the k_LR probe
   enum { F = 0, VALID = 3, X_REF = 4, F_REF = 7, NCOL = 10 };
   double **cache = nullptr;
 
-  KSpaceKIFMM *ks = nullptr;
   Mode mode = Mode::Hold;
   bool energy_every = false;
   bool auto_mode = false;

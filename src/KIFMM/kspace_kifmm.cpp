@@ -1,7 +1,7 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 #include "kspace_kifmm.h"
 
-#include "fix_kifmm_stride.h"
+#include "kifmm_force_schedule.h"
 #include "kifmm_rigid_bodies.h"
 #include "mpi_communicator.h"
 #include "periodic.h"
@@ -167,7 +167,7 @@ void KSpaceKIFMM::init()
                kifmm_lammps::kernel_name(kset.kernel));
   }
 
-  stride = nullptr;    // fix kifmm/stride re-attaches in its init
+  find_force_schedule();    // fix kifmm/stride: evaluations on a schedule
   find_rigid_bodies();    // fix clump/rigid: pairs inside a clump are left out
   qqrd2e = force->qqrd2e;
   scale = 1.0;
@@ -459,6 +459,14 @@ void KSpaceKIFMM::evaluate_points(bool want_potential, double &comm_time, std::s
   subtract_body_pairs(want_potential);
 }
 
+void KSpaceKIFMM::find_force_schedule()
+{
+  // (a second one is an error of fix kifmm/stride's init)
+  schedule = nullptr;
+  for (int i = 0; i < modify->nfix && !schedule; ++i)
+    schedule = dynamic_cast<KIFMMForceSchedule *>(modify->fix[i]);
+}
+
 bool KSpaceKIFMM::distributed() const
 {
   return comm->nprocs > 1;
@@ -472,16 +480,16 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
 
   // fix kifmm/stride: on skipped steps it adds the held forces (or none) and reports the last
   // energy/virial; EnergyOnly evaluates without adding forces; Evaluate stores the forces
-  using Stride = FixKIFMMStride::Action;
+  using Stride = KIFMMForceSchedule::Action;
   Stride action = Stride::Plain;
-  if (stride) {
-    action = stride->plan(eflag_global || vflag_global, eflag_atom || vflag_atom, vflag_global,
-                          energy, virial);
+  if (schedule) {
+    action = schedule->plan(eflag_global || vflag_global, eflag_atom || vflag_atom, vflag_global,
+                            energy, virial, [this](int i) { return strength_of(i) != 0.0; });
     if (action == Stride::Skip) return;
   }
-  const bool keep = action == Stride::Evaluate && stride->keeps_energy();
+  const bool keep = action == Stride::Evaluate && schedule->keeps_energy();
   const bool apply = action != Stride::EnergyOnly;
-  const double fscale = stride ? stride->force_scale(action) : 1.0;
+  const double fscale = schedule ? schedule->force_scale(action) : 1.0;
 
   // grow per-atom arrays if requested (as the KSPACE styles do)
   if (atom->nmax > maxeatom && eflag_atom) {
@@ -519,7 +527,7 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   const double cf = force_prefactor(), ce = energy_prefactor();
   double e_local = 0.0;
   double v_local[6] = {0, 0, 0, 0, 0, 0};
-  if (action == Stride::Evaluate) stride->begin_evaluation();
+  if (action == Stride::Evaluate) schedule->begin_evaluation();
   for (std::size_t k = 0; k < n; ++k) {
     const int i = index[k];
     const double s = strength[k];
@@ -532,7 +540,7 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
     }
     if (action == Stride::Evaluate) {
       const double fk[3] = {fx, fy, fz};
-      stride->store(i, fk, &xyz[3 * k]);
+      schedule->store(i, fk, &xyz[3 * k]);
     }
     if (want_potential) {
       const double e = 0.5 * ce * s * pot[k];
@@ -555,7 +563,7 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   if (eflag_global || keep) MPI_Allreduce(&e_local, &energy, 1, MPI_DOUBLE, MPI_SUM, world);
   if (vflag_global || keep) MPI_Allreduce(v_local, virial, 6, MPI_DOUBLE, MPI_SUM, world);
   if (periodic && (vflag_global || keep)) periodic_virial(e_local);
-  if (action == Stride::Evaluate) stride->end_evaluation(energy, virial);
+  if (action == Stride::Evaluate) schedule->end_evaluation(energy, virial);
 
   if (vflag_atom && periodic)
     error->all(FLERR, "kspace_style kifmm: per-atom virial (compute stress/atom) is not available "

@@ -110,9 +110,9 @@ class KSpaceKIFMM : public KSpace {
   void periodic_cell();
   void periodic_virial(double e_local);
 
-  // fix kifmm/stride attaches itself at its init (after this init, which detaches it)
-  class FixKIFMMStride *stride = nullptr;
-  friend class FixKIFMMStride;
+  // the fix scheduling the evaluations (fix kifmm/stride), found among the fixes at init
+  class KIFMMForceSchedule *schedule = nullptr;
+  void find_force_schedule();
 };
 
 }    // namespace LAMMPS_NS

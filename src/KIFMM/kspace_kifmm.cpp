@@ -393,17 +393,8 @@ void KSpaceKIFMM::report_coincident_pairs(std::size_t local_pairs)
 // KIFMM_MEMORY_LIMIT_MB when set (both read in setup()).
 void KSpaceKIFMM::check_memory(std::size_t nsources)
 {
-  const double p = engine_options.order, m = std::max(1, engine_options.leaf_size);
-  const double leaves = std::max(1.0, (double) nsources / (0.5 * m));
-  // per point: coordinates, strength, sort keys, gradients, potential, target copies (~30
-  // doubles); per cell: up/down equivalent densities and check values, the FFT of the
-  // upward density and the M2L accumulation ((2p)^3 complex each); operators as reported
-  const double surface = 6.0 * (p - 1) * (p - 1) + 2.0, grid = 8.0 * p * p * p;
-  double bytes = 30.0 * 8.0 * (double) nsources + leaves * 8.0 / 7.0 *
-      (4.0 * surface * 8.0 + 2.0 * grid * 16.0) + (double) engine->stats().operator_bytes;
-  // periodic single-level grid: the spectra of all cells ((2p)^2 (p+1) complex each)
-  const double kg = engine_options.periodic_grid;
-  bytes += kg * kg * kg * (4.0 * p * p * (p + 1) * 16.0 + 4.0 * surface * 8.0);
+  const double bytes =
+      kifmm::estimate_memory_bytes(engine_options, nsources, engine->stats().operator_bytes);
   const double need_mb = bytes / 1048576.0;
   const double limit_mb = memory_limit_mb;
   int refuse = limit_mb > 0 && need_mb > limit_mb, any = 0;
@@ -581,58 +572,27 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
 }
 
 // Per-atom virial v_i,ab = 1/2 sum_j (x_i - x_j)_a F_ij,b, origin independent, as LAMMPS's pair
-// styles tally it. sum_j x_j,a F_ij,b = c s_i d_b psi_a(x_i), with psi_a the potential of
-// strengths s_j x_j,a: three more gradient evaluations, done only when a compute asks.
+// styles tally it: the engine's (kifmm::point_virial: three more gradient evaluations, done only
+// when a compute asks) without the pairs inside rigid bodies.
 void KSpaceKIFMM::per_atom_virial(double cf, double center[3])
 {
   const std::size_t n = index.size();
-  // center the coordinates to limit cancellation
-  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
-  for (std::size_t k = 0; k < n; ++k)
-    for (int d = 0; d < 3; ++d) {
-      lo[d] = std::min(lo[d], xyz[3 * k + d]);
-      hi[d] = std::max(hi[d], xyz[3 * k + d]);
-    }
-  double glo[3], ghi[3];
-  MPI_Allreduce(lo, glo, 3, MPI_DOUBLE, MPI_MIN, world);
-  MPI_Allreduce(hi, ghi, 3, MPI_DOUBLE, MPI_MAX, world);
-  for (int d = 0; d < 3; ++d) center[d] = 0.5 * (glo[d] + ghi[d]);
-
-  // sources: each rank its own atoms, strengths s_j (x_j,a - c_a) (open boundaries only)
-  const bool dist = distributed();
-  std::vector<double> moment(n), g(3 * n);
-  for (int a = 0; a < 3; ++a) {
-    for (std::size_t j = 0; j < n; ++j) moment[j] = strength[j] * (xyz[3 * j + a] - center[a]);
-    std::fill(g.begin(), g.end(), 0.0);
-    if (dist)
-      engine->evaluate_distributed(*kcomm, n, xyz.data(), moment.data(), nullptr, g.data());
-    else
-      engine->evaluate(n, xyz.data(), moment.data(), n, xyz.data(), nullptr, g.data());
-    for (std::size_t k = 0; k < n; ++k) {
-      const int i = index[k];
-      const double s = strength[k];
+  std::vector<double> w(6 * n);
+  kifmm::point_virial(*engine, distributed() ? kcomm.get() : nullptr, n, xyz.data(),
+                      strength.data(), grad.data(), cf, w.data(), center);
+  const int row[3][3] = {{4, 7, 8}, {7, 5, 9}, {8, 9, 6}};    // pair virial T_ab in body_pairs
+  const int slot[3][3] = {{0, 3, 4}, {3, 1, 5}, {4, 5, 2}};   // LAMMPS order xx yy zz xy xz yz
+  for (std::size_t k = 0; k < n; ++k) {
+    double *v = vatom[index[k]];
+    for (int c = 0; c < 6; ++c) v[c] += w[6 * k + c];
+    if (point_body.empty() || !point_body[k]) continue;
+    // pairs inside the body left out: grad has lost their gradient (add x_a times it back),
+    // and their pair virial 1/2 cf s T_ab goes
+    const double *o = &body_pairs[(std::size_t) KIFMMRigidBodies::nvalues * k];
+    const double s = strength[k];
+    for (int a = 0; a < 3; ++a) {
       const double xa = xyz[3 * k + a] - center[a];
-      // F_i,b = cf s_i grad_b ; sum_j x_j,a F_ij,b = cf s_i g_b
-      double w[3];
-      for (int b = 0; b < 3; ++b) w[b] = 0.5 * (xa * cf * s * grad[3 * k + b] - cf * s * g[3 * k + b]);
-      if (!point_body.empty() && point_body[k]) {
-        // pairs inside the body left out: grad has lost their gradient (add x_a times it
-        // back), and their pair virial 1/2 cf s T_ab goes
-        const double *o = &body_pairs[(std::size_t) KIFMMRigidBodies::nvalues * k];
-        const int row[3][3] = {{4, 7, 8}, {7, 5, 9}, {8, 9, 6}};
-        for (int b = 0; b < 3; ++b) w[b] += 0.5 * cf * s * (xa * o[b] - o[row[a][b]]);
-      }
-      // LAMMPS order: xx, yy, zz, xy, xz, yz
-      if (a == 0) {
-        vatom[i][0] += w[0];
-        vatom[i][3] += w[1];
-        vatom[i][4] += w[2];
-      } else if (a == 1) {
-        vatom[i][1] += w[1];
-        vatom[i][5] += w[2];
-      } else {
-        vatom[i][2] += w[2];
-      }
+      for (int b = a; b < 3; ++b) v[slot[a][b]] += 0.5 * cf * s * (xa * o[b] - o[row[a][b]]);
     }
   }
 }

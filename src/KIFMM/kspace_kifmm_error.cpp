@@ -38,10 +38,6 @@ double body_hash(tagint tag, unsigned long long seed)
   return (double) (z >> 11) * 0x1.0p-53;
 }
 
-double relative(double diff2, double ref2)
-{
-  return ref2 > 0 ? std::sqrt(diff2 / ref2) : (diff2 > 0 ? INFINITY : 0.0);
-}
 }    // namespace
 
 double KSpaceKIFMM::MeasuredError::worst() const
@@ -73,17 +69,9 @@ KSpaceKIFMM::MeasuredError KSpaceKIFMM::measure_error(int nsamples)
     std::vector<std::size_t> free_points;
     for (std::size_t k = 0; k < n; ++k)
       if (is_free(k)) free_points.push_back(k);
-    std::size_t want = (std::size_t) std::ceil((double) nsamples * mine[0] / all[0]);
-    if (want >= free_points.size())
-      sample = free_points;
-    else {
-      std::mt19937_64 rng(seed + 104729ULL * (unsigned long long) comm->me);
-      for (std::size_t k = 0; k < want; ++k) {    // partial Fisher-Yates shuffle
-        std::uniform_int_distribution<std::size_t> pick(k, free_points.size() - 1);
-        std::swap(free_points[k], free_points[pick(rng)]);
-        sample.push_back(free_points[k]);
-      }
-    }
+    const std::size_t want = (std::size_t) std::ceil((double) nsamples * mine[0] / all[0]);
+    sample = kifmm::sample_without_replacement(std::move(free_points), want,
+                                               seed + 104729ULL * (unsigned long long) comm->me);
   }
   const double p_clump = all[1] > 0 ? std::min(1.0, nsamples / all[1]) : 0.0;
   for (std::size_t k = 0; k < n; ++k)
@@ -93,39 +81,8 @@ KSpaceKIFMM::MeasuredError KSpaceKIFMM::measure_error(int nsamples)
   std::vector<double> txyz(3 * sample.size()), exact(3 * sample.size(), 0.0);
   for (std::size_t k = 0; k < sample.size(); ++k)
     for (int d = 0; d < 3; ++d) txyz[3 * k + d] = xyz[3 * sample[k] + d];
-  auto exact_sum = [&](std::size_t nt, const double *t, double *g) {
-    if (nt == 0 || strength.empty()) return;
-    if (periodic)    // Ewald reference (engine/periodic.h)
-      kifmm::periodic_direct_sum(engine->kernel(), engine->options().root_center,
-                                 engine->options().root_half_width, strength.size(), xyz.data(),
-                                 strength.data(), nt, t, nullptr, g);
-    else
-      kifmm::direct_sum(engine->kernel(), strength.size(), xyz.data(), strength.data(), nt, t,
-                        nullptr, g);
-  };
-  if (distributed()) {
-    // the samples of all ranks on every rank (small); each rank sums its own atoms on them
-    // (both references are linear in the sources)
-    int nmine = (int) sample.size(), nprocs = comm->nprocs;
-    std::vector<int> counts(nprocs), displs(nprocs);
-    MPI_Allgather(&nmine, 1, MPI_INT, counts.data(), 1, MPI_INT, world);
-    int total = 0, offset = 0;
-    for (int p = 0; p < nprocs; ++p) {
-      displs[p] = 3 * total;
-      if (p == comm->me) offset = total;
-      total += counts[p];
-      counts[p] *= 3;
-    }
-    std::vector<double> all_t(3 * (std::size_t) total), all_g(3 * (std::size_t) total, 0.0);
-    MPI_Allgatherv(txyz.data(), 3 * nmine, MPI_DOUBLE, all_t.data(), counts.data(), displs.data(),
-                   MPI_DOUBLE, world);
-    exact_sum((std::size_t) total, all_t.data(), all_g.data());
-    if (total > 0) MPI_Allreduce(MPI_IN_PLACE, all_g.data(), 3 * total, MPI_DOUBLE, MPI_SUM, world);
-    std::copy(all_g.begin() + 3 * (std::size_t) offset,
-              all_g.begin() + 3 * ((std::size_t) offset + sample.size()), exact.begin());
-  } else {
-    exact_sum(sample.size(), txyz.data(), exact.data());
-  }
+  kifmm::exact_gradient(*engine, distributed() ? kcomm.get() : nullptr, strength.size(), xyz.data(),
+                        strength.data(), sample.size(), txyz.data(), exact.data());
 
   // free atoms: their forces; clumps: net force and torque, summed over ranks per clump.
   // sums[2]: the squared evaluated forces of all free atoms (see the estimate below)
@@ -169,19 +126,12 @@ KSpaceKIFMM::MeasuredError KSpaceKIFMM::measure_error(int nsamples)
     rec.push_back((double) tag);
     rec.insert(rec.end(), c.begin(), c.end());
   }
-  int nrec = (int) rec.size(), nprocs = comm->nprocs;
-  std::vector<int> counts(nprocs), displs(nprocs);
-  MPI_Allgather(&nrec, 1, MPI_INT, counts.data(), 1, MPI_INT, world);
-  int total = 0;
-  for (int p = 0; p < nprocs; ++p) {
-    displs[p] = total;
-    total += counts[p];
-  }
-  std::vector<double> all_rec(std::max(total, 1));
-  MPI_Allgatherv(rec.data(), nrec, MPI_DOUBLE, all_rec.data(), counts.data(), displs.data(),
-                 MPI_DOUBLE, world);
+  std::vector<double> all_rec;
+  std::vector<int> counts;
+  kcomm->allgatherv(rec, all_rec, counts);
+  const std::size_t total = all_rec.size();
   std::map<tagint, std::array<double, 12>> whole;
-  for (int k = 0; k + 13 <= total; k += 13) {
+  for (std::size_t k = 0; k + 13 <= total; k += 13) {
     auto &c = whole.try_emplace((tagint) all_rec[k]).first->second;
     for (int m = 0; m < 12; ++m) c[m] += all_rec[k + 1 + m];
   }
@@ -203,19 +153,13 @@ KSpaceKIFMM::MeasuredError KSpaceKIFMM::measure_error(int nsamples)
   MeasuredError m;
   m.natoms = nfree_all;
   m.nclumps = (bigint) whole.size();
-  // every free atom sampled: the exact error. Otherwise the squared error of the sample scaled
-  // to all free atoms over the squared forces of all of them (the evaluated ones, equal to the
-  // exact ones to the error): the sum of squared forces is dominated by the few atoms with a
-  // close neighbour, which a sample mostly misses or overweights, while the far-field error is
-  // spread over all atoms
-  if (nfree_all > 0 && (double) nfree_all >= all[0])
-    m.atoms = relative(tot[0], tot[1]);
-  else if (nfree_all > 0)
-    m.atoms = relative(tot[0] * all[0] / (double) nfree_all, tot[2]);
+  // free atoms: the sample's squared error scaled to all of them over all their squared forces
+  if (nfree_all > 0)
+    m.atoms = kifmm::sampled_relative_error(tot[0], tot[1], (double) nfree_all, all[0], tot[2]);
   if (m.nclumps > 0) {
-    m.clump_force = relative(csum[0], csum[1]);
+    m.clump_force = kifmm::relative_rms(csum[0], csum[1]);
     // clumps of one point (or all pebbles at the centre of mass) have no torque
-    if (csum[3] > 0 || csum[2] > 0) m.clump_torque = relative(csum[2], csum[3]);
+    if (csum[3] > 0 || csum[2] > 0) m.clump_torque = kifmm::relative_rms(csum[2], csum[3]);
   }
   return m;
 }

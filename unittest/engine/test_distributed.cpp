@@ -453,3 +453,52 @@ int main(int argc, char **argv)
   MPI_Finalize();
   return worst;
 }
+
+// The diagnostics over the ranks (kifmm.h): exact_gradient of all ranks' sources at each
+// rank's targets, and point_virial, equal the serial results on the union of the points.
+TEST(Distributed, DiagnosticsEqualSerial)
+{
+  const int me = rank_of_world(), np = size_of_world();
+  const Points all = kifmm_test::uniform_cube(900, 21);
+  const std::vector<int> owner = random_owner(all, np);
+  Points mine;
+  std::vector<std::size_t> idx;
+  for (std::size_t i = 0; i < all.size(); ++i)
+    if (owner[i] == me) {
+      idx.push_back(i);
+      mine.xyz.insert(mine.xyz.end(), &all.xyz[3 * i], &all.xyz[3 * i] + 3);
+      mine.q.push_back(all.q[i]);
+    }
+  kifmm::Options opt;
+  opt.order = 6;
+  opt.leaf_size = 32;
+  auto ev = kifmm::make_evaluator(kifmm::KernelSpec{}, opt);
+  kifmm::MpiCommunicator comm(MPI_COMM_WORLD);
+  const std::size_t n = all.size(), m = idx.size();
+
+  std::vector<double> ref(3 * n, 0.0), g(3 * m, 0.0);
+  kifmm::direct_sum(kifmm::KernelSpec{}, n, all.xyz.data(), all.q.data(), n, all.xyz.data(), nullptr, ref.data());
+  kifmm::exact_gradient(*ev, &comm, m, mine.xyz.data(), mine.q.data(), m, mine.xyz.data(), g.data());
+  double e[2] = {0, 0};
+  for (std::size_t k = 0; k < m; ++k)
+    for (int d = 0; d < 3; ++d)
+      e[0] = std::max(e[0], std::fabs(g[3 * k + d] - ref[3 * idx[k] + d]) / (std::fabs(ref[3 * idx[k] + d]) + 1e-3));
+
+  // virial: serial on the union, distributed on each rank's points (gradients of the serial run)
+  std::vector<double> gs(3 * n, 0.0), ws(6 * n), wd(6 * m), gm(3 * m);
+  ev->evaluate(n, all.xyz.data(), all.q.data(), n, all.xyz.data(), nullptr, gs.data());
+  double cs[3], cd[3];
+  kifmm::point_virial(*ev, nullptr, n, all.xyz.data(), all.q.data(), gs.data(), 1.0, ws.data(), cs);
+  for (std::size_t k = 0; k < m; ++k)
+    for (int d = 0; d < 3; ++d) gm[3 * k + d] = gs[3 * idx[k] + d];
+  auto evd = kifmm::make_evaluator(kifmm::KernelSpec{}, opt);
+  kifmm::point_virial(*evd, &comm, m, mine.xyz.data(), mine.q.data(), gm.data(), 1.0, wd.data(), cd);
+  double wmax = 0;
+  for (double v : ws) wmax = std::max(wmax, std::fabs(v));
+  for (std::size_t k = 0; k < m; ++k)
+    for (int c = 0; c < 6; ++c) e[1] = std::max(e[1], std::fabs(wd[6 * k + c] - ws[6 * idx[k] + c]) / wmax);
+  for (int d = 0; d < 3; ++d) EXPECT_EQ(cs[d], cd[d]);
+  MPI_Allreduce(MPI_IN_PLACE, e, 2, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  EXPECT_LT(e[0], 1e-11);
+  EXPECT_LT(e[1], 1e-10);
+}

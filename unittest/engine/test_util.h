@@ -1,8 +1,10 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
-// Shared helpers of the engine tests: point distributions and error norms.
+// Shared helpers of the engine tests: error norms, periodic options; the point sets are those of
+// kifmm_point_sets.h (shared with the benchmarks).
 #pragma once
 
 #include "kifmm.h"
+#include "kifmm_point_sets.h"
 
 #include <cmath>
 #include <cstddef>
@@ -11,101 +13,15 @@
 
 namespace kifmm_test {
 
-struct Points {
-  std::vector<double> xyz, q;
-  std::size_t size() const { return q.size(); }
-};
-
-inline Points uniform_cube(std::size_t n, unsigned seed, double half = 1.0)
-{
-  std::mt19937_64 g(seed);
-  std::uniform_real_distribution<double> u(-half, half), uq(-1.0, 1.0);
-  Points p;
-  for (std::size_t i = 0; i < n; ++i) {
-    for (int d = 0; d < 3; ++d) p.xyz.push_back(u(g));
-    p.q.push_back(uq(g));
-  }
-  return p;
-}
-
-// Plummer sphere (scale radius 1), radius clipped at 50, equal masses.
-inline Points plummer(std::size_t n, unsigned seed)
-{
-  std::mt19937_64 g(seed);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  Points p;
-  while (p.size() < n) {
-    const double m = u(g);
-    const double r = 1.0 / std::sqrt(std::pow(m, -2.0 / 3.0) - 1.0);
-    if (!(r < 50.0)) continue;
-    const double z = 2 * u(g) - 1, ph = 2 * M_PI * u(g), s = std::sqrt(1 - z * z);
-    p.xyz.push_back(r * s * std::cos(ph));
-    p.xyz.push_back(r * s * std::sin(ph));
-    p.xyz.push_back(r * z);
-    p.q.push_back(1.0 / n);
-  }
-  return p;
-}
-
-// Two dense Gaussian clusters (sigma 1e-3) 10 apart.
-inline Points two_clusters(std::size_t n, unsigned seed)
-{
-  std::mt19937_64 g(seed);
-  std::normal_distribution<double> nd(0.0, 1e-3);
-  std::uniform_real_distribution<double> uq(-1.0, 1.0);
-  Points p;
-  for (std::size_t i = 0; i < n; ++i) {
-    const double cx = (i % 2) ? 5.0 : -5.0;
-    p.xyz.push_back(cx + nd(g));
-    p.xyz.push_back(nd(g));
-    p.xyz.push_back(nd(g));
-    p.q.push_back(uq(g));
-  }
-  return p;
-}
-
-// Points on the plane z = 0.3.
-inline Points plane(std::size_t n, unsigned seed)
-{
-  Points p = uniform_cube(n, seed);
-  for (std::size_t i = 0; i < n; ++i) p.xyz[3 * i + 2] = 0.3;
-  return p;
-}
-
-// Neutral pairs +q/-q at distance 1e-3.
-inline Points dipoles(std::size_t npairs, unsigned seed)
-{
-  std::mt19937_64 g(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  Points p;
-  for (std::size_t i = 0; i < npairs; ++i) {
-    double c[3], d[3], nrm = 0;
-    for (int k = 0; k < 3; ++k) {
-      c[k] = u(g);
-      d[k] = u(g);
-      nrm += d[k] * d[k];
-    }
-    nrm = std::sqrt(nrm);
-    for (int s = -1; s <= 1; s += 2) {
-      for (int k = 0; k < 3; ++k) p.xyz.push_back(c[k] + s * 0.5e-3 * d[k] / nrm);
-      p.q.push_back(s * 1.0);
-    }
-  }
-  return p;
-}
-
-// n alternating charges +-1 in a Gaussian cluster of this width around (c, c, c)
-inline Points gaussian_cluster(std::size_t n, double c, double sigma, unsigned seed)
-{
-  Points p;
-  std::mt19937_64 g(seed);
-  std::normal_distribution<double> nd(0.0, sigma);
-  for (std::size_t i = 0; i < n; ++i) {
-    for (int k = 0; k < 3; ++k) p.xyz.push_back(c + nd(g));
-    p.q.push_back(i % 2 ? 1.0 : -1.0);
-  }
-  return p;
-}
+using kifmm_points::Points;
+using kifmm_points::uniform_cube;
+using kifmm_points::plummer;
+using kifmm_points::two_clusters;
+using kifmm_points::plane;
+using kifmm_points::dipoles;
+using kifmm_points::gaussian_cluster;
+using kifmm_points::neutral;
+using kifmm_points::plummer_box;
 
 // Options of a periodic evaluation: the cubic cell of half-width h centered at c (origin if
 // null) as fixed root; grid: cells per side of the single-level grid (0: octree of this leaf).
@@ -121,15 +37,6 @@ inline kifmm::Options periodic_options(int order, int leaf, double h = 1.0, cons
   if (c)
     for (int d = 0; d < 3; ++d) o.root_center[d] = c[d];
   return o;
-}
-
-// The same points with the mean charge subtracted (net charge zero).
-inline Points neutral(Points p)
-{
-  double s = 0;
-  for (double q : p.q) s += q;
-  for (double &q : p.q) q -= s / p.q.size();
-  return p;
 }
 
 inline double rel_l2(const std::vector<double> &a, const std::vector<double> &ref)

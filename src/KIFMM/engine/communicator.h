@@ -22,6 +22,7 @@ class Communicator {
   virtual void allreduce_min(double *data, std::size_t n) = 0;
   // every rank's `mine` concatenated in rank order; counts[r] = entries from rank r
   virtual void allgatherv(const std::vector<int> &mine, std::vector<int> &all, std::vector<int> &counts) = 0;
+  virtual void allgatherv(const std::vector<double> &mine, std::vector<double> &all, std::vector<int> &counts) = 0;
   // send[r] goes to rank r; recv[r] is what rank r sent here
   virtual void alltoallv(const std::vector<std::vector<double>> &send, std::vector<std::vector<double>> &recv) = 0;
   virtual void alltoallv(const std::vector<std::vector<int>> &send, std::vector<std::vector<int>> &recv) = 0;
@@ -44,6 +45,11 @@ class SerialCommunicator : public Communicator {
   void allreduce_sum(uint64_t *, std::size_t) override {}
   void allreduce_min(double *, std::size_t) override {}
   void allgatherv(const std::vector<int> &mine, std::vector<int> &all, std::vector<int> &counts) override
+  {
+    all = mine;
+    counts.assign(1, (int) mine.size());
+  }
+  void allgatherv(const std::vector<double> &mine, std::vector<double> &all, std::vector<int> &counts) override
   {
     all = mine;
     counts.assign(1, (int) mine.size());

@@ -13,6 +13,7 @@
 #include <cstddef>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace kifmm {
 
@@ -159,5 +160,47 @@ TreeChoice choose_tree(const KernelSpec &kernel, const Options &options, std::si
 // Modelled cost and depth of the actual tree of these points with this leaf size (as above).
 TreeChoice model_tree(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz,
                       int leaf_size);
+
+}    // namespace kifmm
+
+namespace kifmm {
+
+// ---- what a caller needs besides the potentials and gradients (diagnostics.cpp)
+
+// Memory (bytes) one evaluation with these options takes for n_sources points on a process,
+// given the memory of its precomputed operators (Stats::operator_bytes): points, cells with
+// their densities and FFT spectra, periodic grid spectra, operators.
+double estimate_memory_bytes(const Options &options, std::size_t n_sources, std::size_t operator_bytes);
+
+// Per-point virial of the N-body sum (sources = targets = xyz, strengths q) whose gradients
+// `grad` an evaluation gave, the force of point i being prefactor * q_i * grad_i:
+//   virial[6i + ab] = 1/2 sum_j (x_i - x_j)_a F_ij,b   (xx yy zz xy xz yz; origin independent)
+// computed as 1/2 [(x_i - c)_a F_i,b - prefactor q_i d_b psi_a(x_i)], psi_a the potential of
+// the strengths q_j (x_j - c)_a, c (returned) the centre of the points' bounding box: three more
+// gradient evaluations. comm: distributed over its ranks (each its own points), or null.
+// Open boundaries only (the periodic sum has no per-pair form).
+void point_virial(Evaluator &ev, Communicator *comm, std::size_t n, const double *xyz,
+                  const double *q, const double *grad, double prefactor, double *virial,
+                  double center[3]);
+
+// Sampled error check. exact_gradient: the exact gradient at n_trg targets of the sources
+// (open: direct_sum; the evaluator's periodic cell: the Ewald sum of periodic.h); with comm,
+// collective: every rank passes its own sources and targets and gets the gradient of all
+// ranks' sources at its targets.
+void exact_gradient(const Evaluator &ev, Communicator *comm, std::size_t n_src,
+                    const double *src_xyz, const double *src_q, std::size_t n_trg,
+                    const double *trg_xyz, double *grad);
+// `want` of the candidates at random, without replacement (all when want >= their number).
+std::vector<std::size_t> sample_without_replacement(std::vector<std::size_t> candidates,
+                                                    std::size_t want, unsigned long long seed);
+// sqrt(diff2 / ref2) (0 / 0 = 0, x / 0 = inf)
+double relative_rms(double diff2, double ref2);
+// Relative RMS error of all n_all points from a sample of n_sampled (-1: none): every point
+// sampled, the exact ratio; else the squared error of the sample scaled to all points over the
+// squared evaluated values of all points (the squared values are dominated by the few points
+// with a close neighbour, which a sample mostly misses or overweights, while the far-field
+// error is spread over all points).
+double sampled_relative_error(double sample_diff2, double sample_ref2, double n_sampled,
+                              double n_all, double all_evaluated2);
 
 }    // namespace kifmm

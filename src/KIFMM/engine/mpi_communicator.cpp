@@ -97,20 +97,34 @@ void MpiCommunicator::allreduce_min(double *data, std::size_t n)
   MPI_Allreduce(MPI_IN_PLACE, data, checked(n), MPI_DOUBLE, MPI_MIN, comm_);
 }
 
-void MpiCommunicator::allgatherv(const std::vector<int> &mine, std::vector<int> &all, std::vector<int> &counts)
+namespace {
+template <class T>
+void gather_all(MPI_Comm comm, int size, MPI_Datatype type, const std::vector<T> &mine,
+                std::vector<T> &all, std::vector<int> &counts, int n)
 {
-  int n = checked(mine.size());
-  counts.assign(size_, 0);
-  MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, comm_);
-  std::vector<int> displ(size_);
+  counts.assign(size, 0);
+  MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, comm);
+  std::vector<int> displ(size);
   std::size_t total = 0;
-  for (int r = 0; r < size_; ++r) {
+  for (int r = 0; r < size; ++r) {
     displ[r] = checked(total);
     total += counts[r];
   }
   all.resize(total);
-  MPI_Allgatherv(mine.data(), n, MPI_INT, all.data(), counts.data(), displ.data(), MPI_INT, comm_);
+  MPI_Allgatherv(mine.data(), n, type, all.data(), counts.data(), displ.data(), type, comm);
+}
+}    // namespace
+
+void MpiCommunicator::allgatherv(const std::vector<int> &mine, std::vector<int> &all, std::vector<int> &counts)
+{
+  gather_all(comm_, size_, MPI_INT, mine, all, counts, checked(mine.size()));
   if (size_ > 1) bytes_sent_ += sizeof(int) * (mine.size() + 1);
+}
+
+void MpiCommunicator::allgatherv(const std::vector<double> &mine, std::vector<double> &all, std::vector<int> &counts)
+{
+  gather_all(comm_, size_, MPI_DOUBLE, mine, all, counts, checked(mine.size()));
+  if (size_ > 1) bytes_sent_ += sizeof(double) * mine.size() + sizeof(int);
 }
 
 void MpiCommunicator::alltoallv(const std::vector<std::vector<double>> &send, std::vector<std::vector<double>> &recv)

@@ -25,6 +25,7 @@ class MpiCommunicator : public Communicator {
   void allreduce_sum(uint64_t *data, std::size_t n) override;
   void allreduce_min(double *data, std::size_t n) override;
   void allgatherv(const std::vector<int> &mine, std::vector<int> &all, std::vector<int> &counts) override;
+  void allgatherv(const std::vector<double> &mine, std::vector<double> &all, std::vector<int> &counts) override;
   void alltoallv(const std::vector<std::vector<double>> &send, std::vector<std::vector<double>> &recv) override;
   void alltoallv(const std::vector<std::vector<int>> &send, std::vector<std::vector<int>> &recv) override;
 

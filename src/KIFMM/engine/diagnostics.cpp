@@ -1,0 +1,123 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
+// What a caller of the engine needs besides the potentials and gradients: the memory an
+// evaluation will take, the per-point virial, and the exact reference of the sampled error
+// check (kifmm.h).
+#include "communicator.h"
+#include "kifmm.h"
+#include "periodic.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+namespace kifmm {
+
+double estimate_memory_bytes(const Options &opt, std::size_t n_sources, std::size_t operator_bytes)
+{
+  const double p = opt.order, m = std::max(1, opt.leaf_size);
+  const double leaves = std::max(1.0, (double) n_sources / (0.5 * m));
+  // per point: coordinates, strength, sort keys, gradients, potential, target copies (~30
+  // doubles); per cell: up/down equivalent densities and check values, the FFT of the
+  // upward density and the M2L accumulation ((2p)^3 complex each); operators as reported
+  const double surface = 6.0 * (p - 1) * (p - 1) + 2.0, grid = 8.0 * p * p * p;
+  double bytes = 30.0 * 8.0 * (double) n_sources +
+      leaves * 8.0 / 7.0 * (4.0 * surface * 8.0 + 2.0 * grid * 16.0) + (double) operator_bytes;
+  // periodic single-level grid: the spectra of all cells ((2p)^2 (p+1) complex each)
+  const double kg = opt.periodic_grid;
+  bytes += kg * kg * kg * (4.0 * p * p * (p + 1) * 16.0 + 4.0 * surface * 8.0);
+  return bytes;
+}
+
+void point_virial(Evaluator &ev, Communicator *comm, std::size_t n, const double *xyz,
+                  const double *q, const double *grad, double prefactor, double *virial,
+                  double center[3])
+{
+  // centre of the points' bounding box (all ranks), to limit cancellation
+  double box[6] = {1e300, 1e300, 1e300, 1e300, 1e300, 1e300};    // lo, -hi
+  for (std::size_t k = 0; k < n; ++k)
+    for (int d = 0; d < 3; ++d) {
+      box[d] = std::min(box[d], xyz[3 * k + d]);
+      box[3 + d] = std::min(box[3 + d], -xyz[3 * k + d]);
+    }
+  if (comm) comm->allreduce_min(box, 6);
+  for (int d = 0; d < 3; ++d) center[d] = 0.5 * (box[d] - box[3 + d]);
+
+  std::fill(virial, virial + 6 * n, 0.0);
+  std::vector<double> moment(n), g(3 * n);
+  // component (a, b), a <= b, in the order xx yy zz xy xz yz
+  const int slot[3][3] = {{0, 3, 4}, {-1, 1, 5}, {-1, -1, 2}};
+  for (int a = 0; a < 3; ++a) {
+    for (std::size_t j = 0; j < n; ++j) moment[j] = q[j] * (xyz[3 * j + a] - center[a]);
+    std::fill(g.begin(), g.end(), 0.0);
+    if (comm && comm->size() > 1)
+      ev.evaluate_distributed(*comm, n, xyz, moment.data(), nullptr, g.data());
+    else if (n > 0)
+      ev.evaluate(n, xyz, moment.data(), n, xyz, nullptr, g.data());
+    for (std::size_t k = 0; k < n; ++k) {
+      const double s = q[k], xa = xyz[3 * k + a] - center[a];
+      for (int b = a; b < 3; ++b)
+        virial[6 * k + slot[a][b]] =
+            0.5 * (xa * prefactor * s * grad[3 * k + b] - prefactor * s * g[3 * k + b]);
+    }
+  }
+}
+
+void exact_gradient(const Evaluator &ev, Communicator *comm, std::size_t n_src,
+                    const double *src_xyz, const double *src_q, std::size_t n_trg,
+                    const double *trg_xyz, double *grad)
+{
+  const Options &opt = ev.options();
+  auto sum = [&](std::size_t nt, const double *t, double *g) {
+    if (nt == 0 || n_src == 0) return;
+    if (opt.periodic)
+      periodic_direct_sum(ev.kernel(), opt.root_center, opt.root_half_width, n_src, src_xyz, src_q,
+                          nt, t, nullptr, g);
+    else
+      direct_sum(ev.kernel(), n_src, src_xyz, src_q, nt, t, nullptr, g);
+  };
+  if (!comm || comm->size() == 1) {
+    sum(n_trg, trg_xyz, grad);
+    return;
+  }
+  // the targets of all ranks on every rank (few); each rank sums its own sources on them (the
+  // references are linear in the sources), then the sums are added over the ranks
+  std::vector<double> mine(trg_xyz, trg_xyz + 3 * n_trg), all;
+  std::vector<int> counts;
+  comm->allgatherv(mine, all, counts);
+  std::size_t offset = 0;
+  for (int r = 0; r < comm->rank(); ++r) offset += (std::size_t) counts[r];
+  std::vector<double> g(all.size(), 0.0);
+  sum(all.size() / 3, all.data(), g.data());
+  if (!g.empty()) comm->allreduce_sum(g.data(), g.size());
+  std::copy(g.begin() + offset, g.begin() + offset + 3 * n_trg, grad);
+}
+
+std::vector<std::size_t> sample_without_replacement(std::vector<std::size_t> candidates,
+                                                    std::size_t want, unsigned long long seed)
+{
+  if (want >= candidates.size()) return candidates;
+  std::mt19937_64 rng(seed);
+  std::vector<std::size_t> sample;
+  for (std::size_t k = 0; k < want; ++k) {    // partial Fisher-Yates shuffle
+    std::uniform_int_distribution<std::size_t> pick(k, candidates.size() - 1);
+    std::swap(candidates[k], candidates[pick(rng)]);
+    sample.push_back(candidates[k]);
+  }
+  return sample;
+}
+
+double relative_rms(double diff2, double ref2)
+{
+  return ref2 > 0 ? std::sqrt(diff2 / ref2) : (diff2 > 0 ? INFINITY : 0.0);
+}
+
+double sampled_relative_error(double sample_diff2, double sample_ref2, double n_sampled,
+                              double n_all, double all_evaluated2)
+{
+  if (n_sampled <= 0) return -1.0;
+  if (n_sampled >= n_all) return relative_rms(sample_diff2, sample_ref2);
+  return relative_rms(sample_diff2 * n_all / n_sampled, all_evaluated2);
+}
+
+}    // namespace kifmm

@@ -5,7 +5,10 @@
 // compute() call; the fix knows nothing of the kspace style beyond this interface.
 #pragma once
 
+#include "pointers.h"
+
 #include <functional>
+#include <type_traits>
 
 namespace LAMMPS_NS {
 
@@ -18,7 +21,9 @@ class KIFMMForceSchedule {
     EnergyOnly,    // held forces applied by plan(); evaluate energy/virial, apply no forces
     Skip           // held forces (or none) applied by plan(); last energy/virial reported
   };
-  virtual ~KIFMMForceSchedule() = default;
+  // as LAMMPS's Pointers (noexcept(false) where LAMMPS errors may throw from destructors): the
+  // fix implementing this interface is also a Fix
+  virtual ~KIFMMForceSchedule() noexcept(std::is_nothrow_destructible_v<Pointers>) {}
 
   // This call's action. For Skip and EnergyOnly in hold mode the held forces have been added
   // to atom->f; for Skip, energy and (when want_virial) virial are set to the last evaluated

@@ -208,13 +208,6 @@ void KSpaceKIFMM::init()
     // a previous run of these settings measured which order meets the request: start there
     if (chosen_order > 0) opt.order = chosen_order;
   }
-  // leaf size: given (kspace_modify kifmm leaf); else one rank: chosen from the atom positions
-  // at the first evaluation of the run (choose_tree_from_atoms: the modelled cost of the actual
-  // trees of a few leaf sizes), until then the uniform choice below or the previous run's
-  // choice; several ranks: each holds only its own atoms, so the tree depth of least modelled
-  // cost for this N spread uniformly, the same on every rank
-  kifmm::TreeChoice tree{0, -1, 0.0};
-  tree_choice_pending = false;
   // the tree holds only atoms of nonzero strength (zero-strength atoms are not gathered)
   const bigint nstrong = count_strong_atoms();
   if (kset.cache_dir == "none")
@@ -236,32 +229,19 @@ void KSpaceKIFMM::init()
     }
   }
   opt.periodic = periodic;
-  // periodic single-level grid: given by kspace_modify kifmm grid K, or (grid auto, no leaf
-  // size given) chosen with the tree below (yukawa: back to the octree when the box changes
-  // size, periodic_cell)
-  opt.periodic_grid = 0;
+  if (kset.grid > 0 && !periodic)
+    error->all(FLERR, "kspace_modify kifmm grid {}: the single-level grid needs periodic boundaries "
+                      "(boundary p p p)", kset.grid);
+  // the tree (kifmm::plan_tree): a given leaf size (kspace_modify kifmm leaf); else the uniform
+  // choice for this many atoms and, on one rank, the choice from the atom positions at the first
+  // evaluation of the run (choose_tree_from_atoms); the single-level grid given (kspace_modify
+  // kifmm grid K) or chosen with the tree (grid auto)
+  tree_request = kifmm::TreeRequest{(std::size_t) nstrong, kset.leaf, kset.grid, distributed()};
+  const kifmm::TreePlan plan = kifmm::plan_tree(opt, tree_request, engine ? &engine_options : nullptr);
+  opt = plan.options;
+  const kifmm::TreeChoice &tree = plan.uniform;
   const bool grid_auto = periodic && kset.grid < 0;
-  if (kset.grid > 0) {
-    if (!periodic)
-      error->all(FLERR, "kspace_modify kifmm grid {}: the single-level grid needs periodic boundaries "
-                        "(boundary p p p)", kset.grid);
-    opt.periodic_grid = kset.grid;
-  }
-  if (kset.leaf > 0) {
-    opt.leaf_size = kset.leaf;
-  } else {
-    tree = kifmm::choose_tree(opt.order, (std::size_t) nstrong, periodic, grid_auto);
-    opt.leaf_size = tree.leaf_size;
-    if (grid_auto) opt.periodic_grid = tree.grid;    // several ranks: this choice (uniform model)
-    if (!distributed()) {
-      tree_choice_pending = true;
-      if (engine && engine_options.order == opt.order && engine_options.cache_dir == opt.cache_dir &&
-          engine_options.periodic == opt.periodic) {
-        opt.leaf_size = engine_options.leaf_size;    // kept until the new choice
-        if (grid_auto) opt.periodic_grid = engine_options.periodic_grid;
-      }
-    }
-  }
+  tree_choice_pending = plan.from_points;
 
   if (!engine || engine_options.order != opt.order || engine_options.leaf_size != opt.leaf_size ||
       engine_options.cache_dir != opt.cache_dir || engine_options.periodic != opt.periodic ||
@@ -349,13 +329,10 @@ void KSpaceKIFMM::choose_tree_from_atoms()
   if (n == 0) return;
   kifmm::Options opt = engine->options();    // the periodic cell is its root (periodic_cell)
   const double t0 = MPI_Wtime();
-  const kifmm::TreeChoice c = kifmm::choose_tree(engine->kernel(), opt, n, xyz.data());
+  const kifmm::TreeChoice c = kifmm::choose_tree_from_points(engine->kernel(), tree_request, opt, n, xyz.data());
   const double t_choice = MPI_Wtime() - t0;
-  // grid auto: the choice's grid (0 = octree); grid no or K: as given
-  const int grid = kset.grid < 0 ? c.grid : opt.periodic_grid;
-  if (c.leaf_size != opt.leaf_size || grid != opt.periodic_grid) {
-    opt.leaf_size = c.leaf_size;
-    opt.periodic_grid = grid;
+  const int grid = opt.periodic_grid;
+  if (opt.leaf_size != engine_options.leaf_size || grid != engine_options.periodic_grid) {
     engine = kifmm::make_evaluator(engine->kernel(), opt);
     engine_options = engine->options();
     reported_first_evaluation = false;

@@ -47,6 +47,7 @@ class KSpaceKIFMM : public KSpace {
   // no leaf size given, one rank: the tree is chosen from the atom positions at the first
   // evaluation of each run (kifmm::choose_tree on the counts of the actual trees)
   bool tree_choice_pending = false;
+  kifmm::TreeRequest tree_request;    // what the tree is chosen from (init)
   void choose_tree_from_atoms();
   KIFMMTiming run_timing;
   double memory_limit_mb = 0;    // 0 = unknown: no check

@@ -260,3 +260,69 @@ TEST(TreeChoice, ChoiceFromPointsPeriodic)
               oc.order, c.leaf_size, c.depth, err);
   EXPECT_LE(err, 1e-5);
 }
+
+// plan_tree: the tree policy of an N-body evaluation in one call
+TEST(TreePlan, GivenLeafAndGridAreUsedAsIs)
+{
+  kifmm::Options o = cube_opts(6, 0, true);
+  const kifmm::TreePlan p = kifmm::plan_tree(o, kifmm::TreeRequest{100000, 77, 5, false});
+  EXPECT_EQ(p.options.leaf_size, 77);
+  EXPECT_EQ(p.options.periodic_grid, 5);
+  EXPECT_FALSE(p.from_points);
+  EXPECT_EQ(p.uniform.depth, -1);
+  // a chosen grid with a given leaf size: the octree
+  EXPECT_EQ(kifmm::plan_tree(o, kifmm::TreeRequest{100000, 77, -1, false}).options.periodic_grid, 0);
+  // open boundaries have no grid
+  EXPECT_EQ(kifmm::plan_tree(cube_opts(6, 0, false), kifmm::TreeRequest{100000, 77, 5, false}).options.periodic_grid, 0);
+}
+
+TEST(TreePlan, UniformChoiceThenPointsOnOneProcess)
+{
+  for (bool periodic : {false, true}) {
+    const kifmm::Options o = cube_opts(7, 0, periodic);
+    const std::size_t n = 200000;
+    const kifmm::TreeChoice u = kifmm::choose_tree(7, n, periodic, periodic);
+    const kifmm::TreePlan one = kifmm::plan_tree(o, kifmm::TreeRequest{n, 0, -1, false});
+    EXPECT_TRUE(one.from_points);
+    EXPECT_EQ(one.options.leaf_size, u.leaf_size);
+    EXPECT_EQ(one.options.periodic_grid, periodic ? u.grid : 0);
+    EXPECT_EQ(one.uniform.depth, u.depth);
+    const kifmm::TreePlan many = kifmm::plan_tree(o, kifmm::TreeRequest{n, 0, -1, true});
+    EXPECT_FALSE(many.from_points);
+    EXPECT_EQ(many.options.leaf_size, u.leaf_size);
+    // the evaluator in use is kept until the choice from the points, if its operators fit
+    kifmm::Options current = o;
+    current.leaf_size = 31;
+    current.periodic_grid = periodic ? 4 : 0;
+    const kifmm::TreePlan kept = kifmm::plan_tree(o, kifmm::TreeRequest{n, 0, -1, false}, &current);
+    EXPECT_EQ(kept.options.leaf_size, 31);
+    EXPECT_EQ(kept.options.periodic_grid, current.periodic_grid);
+    current.order = 8;
+    EXPECT_EQ(kifmm::plan_tree(o, kifmm::TreeRequest{n, 0, -1, false}, &current).options.leaf_size, u.leaf_size);
+    // not kept when the tree is chosen by several ranks
+    current.order = 7;
+    EXPECT_EQ(kifmm::plan_tree(o, kifmm::TreeRequest{n, 0, -1, true}, &current).options.leaf_size, u.leaf_size);
+  }
+}
+
+TEST(TreePlan, ChoiceFromPointsSetsTheOptions)
+{
+  const std::size_t n = 4000;
+  const Points p = neutral(uniform_cube(n, 4));
+  kifmm::Options o = cube_opts(6, 0, true);
+  o.periodic_grid = 0;
+  // grid chosen: the options take the choice's leaf and grid
+  const kifmm::TreeChoice c = kifmm::choose_tree(KernelSpec{}, o, n, p.xyz.data());
+  kifmm::Options chosen = o;
+  const kifmm::TreeChoice r =
+      kifmm::choose_tree_from_points(KernelSpec{}, kifmm::TreeRequest{n, 0, -1, false}, chosen, n, p.xyz.data());
+  EXPECT_EQ(r.leaf_size, c.leaf_size);
+  EXPECT_EQ(chosen.leaf_size, c.leaf_size);
+  EXPECT_EQ(chosen.periodic_grid, c.grid);
+  // grid given: kept
+  kifmm::Options given = o;
+  given.periodic_grid = 5;
+  kifmm::choose_tree_from_points(KernelSpec{}, kifmm::TreeRequest{n, 0, 5, false}, given, n, p.xyz.data());
+  EXPECT_EQ(given.periodic_grid, 5);
+  EXPECT_EQ(given.leaf_size, c.leaf_size);
+}

@@ -161,6 +161,33 @@ TreeChoice choose_tree(const KernelSpec &kernel, const Options &options, std::si
 TreeChoice model_tree(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz,
                       int leaf_size);
 
+// The tree of an N-body evaluation, from what the caller asks for (tree_plan.cpp; what
+// kspace_style kifmm uses). A given leaf size is used as is. Otherwise the uniform choice above
+// for n points, and, when one process holds all the points (not distributed), the choice from
+// the points at the first evaluation (choose_tree_from_points). grid (periodic only): > 0 the
+// single-level grid of grid^3 cells, < 0 chosen with the tree (the octree when a leaf size is
+// given), 0 the octree.
+struct TreeRequest {
+  std::size_t n = 0;          // points of nonzero strength, over all ranks
+  int leaf_size = 0;          // > 0: given
+  int grid = 0;
+  bool distributed = false;   // every rank holds only its own points
+};
+struct TreePlan {
+  Options options;            // the requested options with leaf_size and periodic_grid set
+  bool from_points = false;   // choose again from the points at the first evaluation
+  TreeChoice uniform{0, -1, 0.0};    // the uniform choice (depth -1: leaf size given)
+};
+// options: order, periodic, cache and root as they will be used. current: the options of the
+// evaluator in use (or null); a plan that waits for the points keeps its leaf size and grid
+// when it has the same order, boundary and cache, so that no operators are built until then.
+TreePlan plan_tree(const Options &options, const TreeRequest &request, const Options *current = nullptr);
+// The choice from the points for a plan with from_points (request as given to plan_tree;
+// sources = targets = xyz): options.leaf_size from choose_tree(kernel, options, n, xyz), and
+// options.periodic_grid too when the grid is chosen (request.grid < 0). Returns that choice.
+TreeChoice choose_tree_from_points(const KernelSpec &kernel, const TreeRequest &request, Options &options,
+                                   std::size_t n, const double *xyz);
+
 }    // namespace kifmm
 
 namespace kifmm {

@@ -1,0 +1,49 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
+// The tree of an N-body evaluation from what the caller asks for (kifmm.h: plan_tree,
+// choose_tree_from_points), on top of the two choose_tree of calibration.cpp.
+#include "kifmm.h"
+
+namespace kifmm {
+
+namespace {
+bool grid_is_chosen(const Options &options, const TreeRequest &request)
+{
+  return options.periodic && request.grid < 0;
+}
+}    // namespace
+
+TreePlan plan_tree(const Options &options, const TreeRequest &request, const Options *current)
+{
+  TreePlan plan;
+  plan.options = options;
+  Options &opt = plan.options;
+  opt.periodic_grid = options.periodic && request.grid > 0 ? request.grid : 0;
+  if (request.leaf_size > 0) {
+    opt.leaf_size = request.leaf_size;
+    return plan;
+  }
+  const bool choose_grid = grid_is_chosen(options, request);
+  plan.uniform = choose_tree(opt.order, request.n, opt.periodic, choose_grid);
+  opt.leaf_size = plan.uniform.leaf_size;
+  if (choose_grid) opt.periodic_grid = plan.uniform.grid;
+  // several ranks: each holds only its own points, so the uniform choice, the same on every rank
+  if (request.distributed) return plan;
+  plan.from_points = true;
+  if (current && current->order == opt.order && current->cache_dir == opt.cache_dir &&
+      current->periodic == opt.periodic) {
+    opt.leaf_size = current->leaf_size;
+    if (choose_grid) opt.periodic_grid = current->periodic_grid;
+  }
+  return plan;
+}
+
+TreeChoice choose_tree_from_points(const KernelSpec &kernel, const TreeRequest &request, Options &options,
+                                   std::size_t n, const double *xyz)
+{
+  const TreeChoice c = choose_tree(kernel, options, n, xyz);
+  options.leaf_size = c.leaf_size;
+  if (grid_is_chosen(options, request)) options.periodic_grid = c.grid;
+  return c;
+}
+
+}    // namespace kifmm

@@ -36,7 +36,7 @@
 #include "kifmm.h"
 #include "periodic.h"
 #include "kspace_kifmm.h"
-#include "package_styles.h"
+#include "lammps_session.h"
 
 #include "atom.h"
 #include "comm.h"
@@ -142,127 +142,6 @@ double load_average()
 
 // --------------------------------------------------------------------------- configurations
 
-struct Pebble {
-  std::array<double, 3> x;
-  double q;
-};
-
-// Coords and Charges of a LAMMPS molecule file (as tools/clump_shapes.py writes them).
-std::vector<Pebble> read_molecule(const std::string &path)
-{
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot read molecule file " + path);
-  std::vector<std::string> lines;
-  std::string line;
-  while (std::getline(in, line)) {
-    auto h = line.find('#');
-    if (h != std::string::npos) line.resize(h);
-    lines.push_back(line);
-  }
-  int natoms = -1;
-  std::vector<Pebble> p;
-  for (size_t i = 0; i < lines.size(); ++i) {
-    std::istringstream ls(lines[i]);
-    std::string w1, w2;
-    ls >> w1 >> w2;
-    if (w2 == "atoms" && natoms < 0) {
-      natoms = std::stoi(w1);
-      p.assign(natoms, Pebble{{0, 0, 0}, 0.0});
-    } else if ((w1 == "Coords" || w1 == "Charges") && w2.empty() && natoms > 0) {
-      int got = 0;
-      for (size_t j = i + 1; j < lines.size() && got < natoms; ++j) {
-        std::istringstream rs(lines[j]);
-        int id;
-        if (!(rs >> id)) continue;
-        if (id < 1 || id > natoms) throw std::runtime_error("bad atom id in " + path);
-        if (w1 == "Coords")
-          rs >> p[id - 1].x[0] >> p[id - 1].x[1] >> p[id - 1].x[2];
-        else
-          rs >> p[id - 1].q;
-        ++got;
-      }
-    }
-  }
-  if (natoms <= 0) throw std::runtime_error("no atoms in " + path);
-  return p;
-}
-
-// nclumps copies of a molecule at random positions and orientations in [0,1]^3 without
-// overlap of their bounding spheres (random sequential addition), uniformly scaled down so
-// that the bounding spheres fill at most 20% of the volume.
-kifmm_test::Configuration clumps(const std::vector<Pebble> &mol, int nclumps, unsigned seed,
-                                 double pebble_radius, double *scale_out)
-{
-  double R = 0;
-  std::array<double, 3> c{0, 0, 0};
-  for (auto &p : mol)
-    for (int d = 0; d < 3; ++d) c[d] += p.x[d] / mol.size();
-  for (auto &p : mol) {
-    double r2 = 0;
-    for (int d = 0; d < 3; ++d) r2 += (p.x[d] - c[d]) * (p.x[d] - c[d]);
-    R = std::max(R, std::sqrt(r2));
-  }
-  R += pebble_radius;
-  const double margin = 0.02, side = 1.0 - 2 * margin;
-  const double phi1 = nclumps * 4.0 / 3.0 * M_PI * R * R * R / (side * side * side);
-  const double scale = std::min(1.0, std::cbrt(0.2 / phi1));
-  const double Rs = R * scale;
-  if (scale_out) *scale_out = scale;
-
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::normal_distribution<double> g(0.0, 1.0);
-  // cell hash of accepted centres, cell >= 2 Rs
-  const int nc = std::max(1, std::min(200, (int) std::floor(side / (2 * Rs))));
-  const double h = side / nc;
-  std::vector<std::vector<int>> cells((size_t) nc * nc * nc);
-  std::vector<std::array<double, 3>> centres;
-  auto cell_of = [&](double v) { return std::min(nc - 1, std::max(0, (int) ((v - margin - Rs) / h))); };
-  kifmm_test::Configuration conf;
-  int tries = 0;
-  while ((int) centres.size() < nclumps) {
-    if (++tries > 200 * nclumps) throw std::runtime_error("clumps: cannot place all clumps");
-    std::array<double, 3> ctr;
-    for (int d = 0; d < 3; ++d) ctr[d] = margin + Rs + (side - 2 * Rs) * u(rng);
-    int ci[3] = {cell_of(ctr[0]), cell_of(ctr[1]), cell_of(ctr[2])};
-    bool ok = true;
-    for (int dx = -1; dx <= 1 && ok; ++dx)
-      for (int dy = -1; dy <= 1 && ok; ++dy)
-        for (int dz = -1; dz <= 1 && ok; ++dz) {
-          int a = ci[0] + dx, b = ci[1] + dy, e = ci[2] + dz;
-          if (a < 0 || b < 0 || e < 0 || a >= nc || b >= nc || e >= nc) continue;
-          for (int k : cells[((size_t) a * nc + b) * nc + e]) {
-            double r2 = 0;
-            for (int d = 0; d < 3; ++d) r2 += (centres[k][d] - ctr[d]) * (centres[k][d] - ctr[d]);
-            if (r2 < 4 * Rs * Rs) {
-              ok = false;
-              break;
-            }
-          }
-        }
-    if (!ok) continue;
-    cells[((size_t) ci[0] * nc + ci[1]) * nc + ci[2]].push_back((int) centres.size());
-    centres.push_back(ctr);
-    // random rotation from a uniform unit quaternion
-    double qw = g(rng), qx = g(rng), qy = g(rng), qz = g(rng);
-    double qn = std::sqrt(qw * qw + qx * qx + qy * qy + qz * qz);
-    qw /= qn, qx /= qn, qy /= qn, qz /= qn;
-    const double Rm[3][3] = {
-        {1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)},
-        {2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw)},
-        {2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy)}};
-    for (auto &p : mol) {
-      std::array<double, 3> r, x;
-      for (int d = 0; d < 3; ++d) r[d] = (p.x[d] - c[d]) * scale;
-      for (int d = 0; d < 3; ++d)
-        x[d] = ctr[d] + Rm[d][0] * r[0] + Rm[d][1] * r[1] + Rm[d][2] * r[2];
-      conf.x.push_back(x);
-      conf.q.push_back(p.q);
-    }
-  }
-  return conf;
-}
-
 int cmd_gen(const Args &a)
 {
   const std::string name = get(a, "config");
@@ -280,10 +159,10 @@ int cmd_gen(const Args &a)
   else if (name == "dipoles")
     c = kifmm_test::dipoles(n, seed);
   else if (name == "clumps") {
-    auto mol = read_molecule(get(a, "mol"));
+    auto mol = kifmm_test::read_molecule(get(a, "mol"));
     clump = (int) mol.size();
     const int nclumps = std::max(1, (int) std::lround((double) n / clump));
-    c = clumps(mol, nclumps, seed, std::stod(get(a, "pebble-radius", "0.005")), &scale);
+    c = kifmm_test::clumps(mol, nclumps, seed, std::stod(get(a, "pebble-radius", "0.005")), &scale);
   } else
     throw std::runtime_error("unknown configuration " + name);
   kifmm_test::write_charge_data(get(a, "out"), c);
@@ -300,26 +179,12 @@ int cmd_gen(const Args &a)
 // so the driver keeps it in a file that run_bench.py shows when a run fails)
 LAMMPS *open_lammps(const std::string &screen)
 {
-  std::vector<std::string> args = {"bench_solvers", "-log", "none", "-nocite", "-screen", screen};
-  std::vector<char *> argv;
-  for (auto &s : args) argv.push_back(const_cast<char *>(s.c_str()));
-  argv.push_back(nullptr);
-  auto *lmp = new LAMMPS((int) argv.size() - 1, argv.data(), MPI_COMM_WORLD);
-  kifmm_lammps::add_package_styles(lmp);
-  return lmp;
-}
-
-void commands(LAMMPS *lmp, const std::string &lines)
-{
-  std::istringstream in(lines);
-  std::string line;
-  while (std::getline(in, line))
-    if (line.find_first_not_of(" \t") != std::string::npos) lmp->input->one(line);
+  return kifmm_test::open_lammps(MPI_COMM_WORLD, {"-screen", screen, "-echo", "none"});
 }
 
 void load(LAMMPS *lmp, const Args &a, bool periodic)
 {
-  commands(lmp, "units lj\natom_style " + get(a, "atom-style", "charge") + "\nboundary " +
+  kifmm_test::run_lines(lmp, "units lj\natom_style " + get(a, "atom-style", "charge") + "\nboundary " +
                (periodic ? "p p p" : "f f f") + "\natom_modify map array\nread_data " +
                get(a, "data") + "\nthermo_style custom step pe\nthermo_modify norm no\n");
 }
@@ -405,7 +270,7 @@ int cmd_ref(const Args &a)
   if (periodic && pref != "engine") {
     // LAMMPS's ewald at a tight accuracy with a real-space cutoff of a few spacings
     const double cut = 3.0 * mean_spacing(lmp);
-    commands(lmp, "pair_style coul/long " + std::to_string(cut) +
+    kifmm_test::run_lines(lmp, "pair_style coul/long " + std::to_string(cut) +
                  "\npair_coeff * *\npair_modify table 0\nkspace_style ewald " + pref +
                  "\nneigh_modify one 100000 page 1000000\nrun 0 post no\n");
     AtomsByTag g = gather(lmp);
@@ -560,7 +425,7 @@ int cmd_run(const Args &a)
     }
     if (sp.has("leaf")) mod += " leaf " + sp.kv.at("leaf");
     if (sp.has("cache")) mod += " cache " + sp.kv.at("cache");
-    commands(lmp, "pair_style none\nkspace_style kifmm " + acc + "\n" +
+    kifmm_test::run_lines(lmp, "pair_style none\nkspace_style kifmm " + acc + "\n" +
                  (mod.empty() ? "" : "kspace_modify kifmm" + mod + "\n"));
     extra = ", \"order\": " + std::to_string(choice.order) +
         ", \"calibrated_error\": " + fmtd(choice.measured_error);
@@ -572,23 +437,23 @@ int cmd_run(const Args &a)
         "kspace_style msm " + fmtd(acc) + "\nkspace_modify cutoff/adjust no\n";
     if (sp.has("order")) s += "kspace_modify order " + sp.kv.at("order") + "\n";
     s += "neighbor " + fmtd(0.1 * cut) + " bin\nneigh_modify one 200000 page 2000000\n";
-    commands(lmp, s);
+    kifmm_test::run_lines(lmp, s);
     extra = ", \"cutoff\": " + fmtd(cut) + ", \"accuracy_abs\": " + fmtd(acc);
   } else if (sp.name == "ewald" || sp.name == "pppm") {
     if (!periodic) throw std::runtime_error(sp.name + " is run for periodic cases only");
     const double cut = sp.num("cut", 3.0) * spacing;
     const double acc = sp.num("acc", 1e-4) * f_rms;
-    commands(lmp, "pair_style coul/long " + fmtd(cut) + "\npair_coeff * *\npair_modify table 0\n" +
+    kifmm_test::run_lines(lmp, "pair_style coul/long " + fmtd(cut) + "\npair_coeff * *\npair_modify table 0\n" +
                  "kspace_style " + sp.name + " " + fmtd(acc) + "\nneighbor " + fmtd(0.1 * cut) +
                  " bin\nneigh_modify one 200000 page 2000000\n");
-    if (sp.has("order")) commands(lmp, "kspace_modify order " + sp.kv.at("order") + "\n");
+    if (sp.has("order")) kifmm_test::run_lines(lmp, "kspace_modify order " + sp.kv.at("order") + "\n");
     extra = ", \"cutoff\": " + fmtd(cut) + ", \"accuracy_abs\": " + fmtd(acc);
   } else if (sp.name == "coulcut") {
     const double *lo = lmp->domain->boxlo, *hi = lmp->domain->boxhi;
     double diag = 0;
     for (int d = 0; d < 3; ++d) diag += (hi[d] - lo[d]) * (hi[d] - lo[d]);
     const double cut = 1.01 * std::sqrt(diag);
-    commands(lmp, "pair_style coul/cut " + fmtd(cut) + "\npair_coeff * *\nneighbor " +
+    kifmm_test::run_lines(lmp, "pair_style coul/cut " + fmtd(cut) + "\npair_coeff * *\nneighbor " +
                  fmtd(0.01 * cut) + " nsq\nneigh_modify one 2000000 page 20000000\n");
   } else if (sp.name == "direct") {
     lammps_solver = false;
@@ -601,7 +466,7 @@ int cmd_run(const Args &a)
   AtomsByTag g;
   if (lammps_solver) {
     double t0 = wall(), c0 = cpu();
-    commands(lmp, "run 0 post no");
+    kifmm_test::run_lines(lmp, "run 0 post no");
     t_setup = wall() - t0;
     c_setup = cpu() - c0;
     Atom *atom = lmp->atom;

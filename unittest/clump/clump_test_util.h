@@ -1,11 +1,12 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
-// Shared helpers of the fix clump/rigid tests: the standard box, molecule files written on the
-// fly, and the per-clump rows of compute rigid/local "<fix-ID>_local" gathered over ranks.
+// Shared helpers of the fix clump/rigid tests (LAMMPS instances: lammps_session.h): the standard
+// box, molecule files written on the fly, and the per-clump rows of compute rigid/local "<fix-ID>_local" gathered over ranks.
 #pragma once
 
 #include "clump_union.h"
 
-#include "package_styles.h"
+#include "configurations.h"
+#include "lammps_session.h"
 
 #include "compute.h"
 #include "input.h"
@@ -55,30 +56,8 @@ thermo_style custom step
   return buf;
 }
 
-// A LAMMPS instance on `comm` with the package's styles (quiet unless KIFMM_TEST_VERBOSE).
-inline LAMMPS_NS::LAMMPS *make_lammps(MPI_Comm comm, const std::string &log = "none")
-{
-  std::vector<std::string> args = {"clump_test", "-log", log, "-nocite", "-echo", "none"};
-  if (!std::getenv("KIFMM_TEST_VERBOSE")) {
-    args.push_back("-screen");
-    args.push_back("none");
-  }
-  std::vector<char *> argv;
-  for (auto &a : args) argv.push_back(const_cast<char *>(a.c_str()));
-  argv.push_back(nullptr);
-  auto *lmp = new LAMMPS_NS::LAMMPS((int) args.size(), argv.data(), comm);
-  kifmm_lammps::add_package_styles(lmp);
-  return lmp;
-}
-
-// Runs the non-blank lines of `script` one by one.
-inline void run_script(LAMMPS_NS::LAMMPS *lmp, const std::string &script)
-{
-  std::istringstream in(script);
-  std::string line;
-  while (std::getline(in, line))
-    if (line.find_first_not_of(" \t") != std::string::npos) lmp->input->one(line);
-}
+using kifmm_test::open_lammps;
+using kifmm_test::run_lines;
 
 // Molecules dim/asym/dip and a row of 8 clumps along x (IDs 100-107), one straddling x = 0
 // (the processor boundary on 2 ranks).
@@ -97,9 +76,8 @@ inline std::string clump_row_commands(const std::string &dimer_file, const std::
   return s.str();
 }
 
-struct Pebble {
-  double x = 0, y = 0, z = 0, r = 0, q = 0;
-};
+using Pebble = kifmm_test::MoleculePebble;
+using kifmm_test::read_molecule;
 
 // Per-process scratch directory, removed when the process exits (also after a LAMMPS error,
 // which ends the process through exit()).
@@ -138,36 +116,6 @@ inline std::string write_molecule(const std::string &name, const std::vector<Peb
   return path;
 }
 
-// Pebbles (Coords, Diameters, Charges) of a molecule file as written by tools/clump_shapes.py.
-inline std::vector<Pebble> read_molecule(const std::string &path)
-{
-  std::ifstream f(path);
-  std::string line, section;
-  std::map<int, Pebble> p;
-  while (std::getline(f, line)) {
-    auto hash = line.find('#');
-    if (hash != std::string::npos) line.resize(hash);
-    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-    if (line == "Coords" || line == "Types" || line == "Charges" || line == "Diameters") {
-      section = line;
-      continue;
-    }
-    int id;
-    double a, b, c;
-    if (section == "Coords" && std::sscanf(line.c_str(), "%d %lf %lf %lf", &id, &a, &b, &c) == 4) {
-      p[id].x = a;
-      p[id].y = b;
-      p[id].z = c;
-    } else if (section == "Diameters" && std::sscanf(line.c_str(), "%d %lf", &id, &a) == 2)
-      p[id].r = 0.5 * a;
-    else if (section == "Charges" && std::sscanf(line.c_str(), "%d %lf", &id, &a) == 2)
-      p[id].q = a;
-  }
-  std::vector<Pebble> out;
-  for (auto &[id, q] : p) out.push_back(q);
-  return out;
-}
-
 inline std::vector<clump::Sphere> spheres(const std::vector<Pebble> &p)
 {
   std::vector<clump::Sphere> s;
@@ -203,20 +151,9 @@ inline std::map<int, std::vector<double>> clump_rows(LAMMPS_NS::LAMMPS *lmp,
     for (int i = 0; i < c->size_local_rows; ++i)
       for (int k = 0; k < NCOL; ++k) mine.push_back(c->array_local[i][k]);
   }
-  int n = (int) mine.size(), nprocs;
-  MPI_Comm_size(lmp->world, &nprocs);
-  std::vector<int> counts(nprocs), displs(nprocs);
-  MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, lmp->world);
-  int total = 0;
-  for (int p = 0; p < nprocs; ++p) {
-    displs[p] = total;
-    total += counts[p];
-  }
-  std::vector<double> all(total);
-  MPI_Allgatherv(mine.data(), n, MPI_DOUBLE, all.data(), counts.data(), displs.data(),
-                 MPI_DOUBLE, lmp->world);
+  const std::vector<double> all = kifmm_test::gather_rows(lmp, mine, NCOL);
   std::map<int, std::vector<double>> rows;
-  for (int k = 0; k + NCOL <= total; k += NCOL)
+  for (std::size_t k = 0; k + NCOL <= all.size(); k += NCOL)
     rows[(int) all[k + MOL]] = std::vector<double>(all.begin() + k, all.begin() + k + NCOL);
   return rows;
 }

@@ -62,10 +62,10 @@ TEST(ClumpMpi, ParallelEqualsSerial)
   const std::string asym_file = write_molecule("asym", asymmetric());
   const std::string script = system_script(dimer_file, asym_file);
 
-  LAMMPS *par = make_lammps(MPI_COMM_WORLD);
-  LAMMPS *ser = make_lammps(MPI_COMM_SELF);
-  run_script(par, script);
-  run_script(ser, script);
+  LAMMPS *par = open_lammps(MPI_COMM_WORLD);
+  LAMMPS *ser = open_lammps(MPI_COMM_SELF);
+  run_lines(par, script);
+  run_lines(ser, script);
 
   int nprocs;
   MPI_Comm_size(MPI_COMM_WORLD, &nprocs);
@@ -73,8 +73,8 @@ TEST(ClumpMpi, ParallelEqualsSerial)
   {
     int ic = par->modify->find_compute("c_local");
     ASSERT_GE(ic, 0);
-    run_script(par, "run 0");
-    run_script(ser, "run 0");
+    run_lines(par, "run 0");
+    run_lines(ser, "run 0");
     auto *c = par->modify->compute[ic];
     c->compute_local();
     int mine = c->size_local_rows, fewest;
@@ -84,8 +84,8 @@ TEST(ClumpMpi, ParallelEqualsSerial)
   auto r0 = clump_rows(ser, "c");
   ASSERT_EQ(r0.size(), 8u);
   for (int chunk = 0; chunk < 3; ++chunk) {
-    run_script(par, "run 500 post no");
-    run_script(ser, "run 500 post no");
+    run_lines(par, "run 500 post no");
+    run_lines(ser, "run 500 post no");
     auto rp = clump_rows(par, "c"), rs = clump_rows(ser, "c");
     ASSERT_EQ(rp.size(), rs.size());
     for (auto &[mol, s] : rs) {
@@ -135,13 +135,13 @@ TEST_P(ClumpMpiKifmm, ParallelEqualsSerial)
   script += "set type 1 charge 0.25\ndielectric 1.0e14\nkspace_style kifmm 1e-8\n"
             "fix st all kifmm/stride 5\nthermo_style custom step elong\nthermo_modify norm no\n";
 
-  LAMMPS *par = make_lammps(MPI_COMM_WORLD);
-  LAMMPS *ser = make_lammps(MPI_COMM_SELF);
-  run_script(par, script);
-  run_script(ser, script);
+  LAMMPS *par = open_lammps(MPI_COMM_WORLD);
+  LAMMPS *ser = open_lammps(MPI_COMM_SELF);
+  run_lines(par, script);
+  run_lines(ser, script);
   for (int chunk = 0; chunk < 3; ++chunk) {
-    run_script(par, chunk == 0 ? "run 0 post no" : "run 200 post no");
-    run_script(ser, chunk == 0 ? "run 0 post no" : "run 200 post no");
+    run_lines(par, chunk == 0 ? "run 0 post no" : "run 200 post no");
+    run_lines(ser, chunk == 0 ? "run 0 post no" : "run 200 post no");
     auto rp = clump_rows(par, "c"), rs = clump_rows(ser, "c");
     ASSERT_EQ(rs.size(), 8u);
     ASSERT_EQ(rp.size(), rs.size());

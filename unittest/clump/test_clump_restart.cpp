@@ -211,19 +211,19 @@ TEST_P(ClumpRestartSplit, SplitRunEqualsTheUnsplitRun)
   const std::string fix_args = GetParam();
   script = system_script(dimer_file, asym_file, fix_args);
 
-  LAMMPS *lmp = make_lammps(MPI_COMM_WORLD);
-  run_script(lmp, script + "run 300 post no");
+  LAMMPS *lmp = open_lammps(MPI_COMM_WORLD);
+  run_lines(lmp, script + "run 300 post no");
   const State unsplit = state_of(lmp);
   delete lmp;
 
-  lmp = make_lammps(MPI_COMM_WORLD);
-  run_script(lmp, script + "run 137 post no\nwrite_restart " + file);
+  lmp = open_lammps(MPI_COMM_WORLD);
+  run_lines(lmp, script + "run 137 post no\nwrite_restart " + file);
   const State before = state_of(lmp);
   delete lmp;
 
   // mass properties and state survive the restart file (checked after run 0)
-  lmp = make_lammps(MPI_COMM_WORLD);
-  run_script(lmp, restarted(file, "fix c all clump/rigid " + fix_args) + "run 0 post no");
+  lmp = open_lammps(MPI_COMM_WORLD);
+  run_lines(lmp, restarted(file, "fix c all clump/rigid " + fix_args) + "run 0 post no");
   const State at_restart = state_of(lmp);
   delete lmp;
   ASSERT_EQ(at_restart.clumps.size(), 8u);
@@ -236,14 +236,14 @@ TEST_P(ClumpRestartSplit, SplitRunEqualsTheUnsplitRun)
       EXPECT_EQ(s[k], r[k]) << "column " << k;
   }
 
-  lmp = make_lammps(MPI_COMM_WORLD);
-  run_script(lmp, restarted(file, "fix c all clump/rigid " + fix_args) + "run 163 post no");
+  lmp = open_lammps(MPI_COMM_WORLD);
+  run_lines(lmp, restarted(file, "fix c all clump/rigid " + fix_args) + "run 163 post no");
   const State split = state_of(lmp);
   delete lmp;
 
   // control: the fix under another ID does not take the stored state
-  lmp = make_lammps(MPI_COMM_WORLD);
-  run_script(lmp, restarted(file, "fix c2 all clump/rigid " + fix_args) + "run 163 post no");
+  lmp = open_lammps(MPI_COMM_WORLD);
+  run_lines(lmp, restarted(file, "fix c2 all clump/rigid " + fix_args) + "run 163 post no");
   const State control = state_of(lmp, "c2");
   delete lmp;
 
@@ -281,12 +281,12 @@ TEST_F(ClumpRestart, ChangedDensityRecomputesWithAWarning)
 {
   const std::string file = shared_name("density.restart");
   const std::string log = shared_name("density.log");
-  LAMMPS *lmp = make_lammps(MPI_COMM_WORLD);
-  run_script(lmp, script + "run 10 post no\nwrite_restart " + file);
+  LAMMPS *lmp = open_lammps(MPI_COMM_WORLD);
+  run_lines(lmp, script + "run 10 post no\nwrite_restart " + file);
   const State before = state_of(lmp);
   delete lmp;
-  lmp = make_lammps(MPI_COMM_WORLD, log);
-  run_script(lmp, restarted(file, "fix c all clump/rigid density 5000") + "run 0 post no");
+  lmp = open_lammps(MPI_COMM_WORLD, {"-log", log});
+  run_lines(lmp, restarted(file, "fix c all clump/rigid density 5000") + "run 0 post no");
   const State after = state_of(lmp);
   delete lmp;
   for (const auto &[mol, r] : before.clumps)
@@ -306,8 +306,8 @@ TEST_F(ClumpRestart, WriteDataWarnsAndReadDataRecoversTheClumps)
 {
   const std::string data = shared_name("clumps.data");
   const std::string log = shared_name("write_data.log");
-  LAMMPS *lmp = make_lammps(MPI_COMM_WORLD, log);
-  run_script(lmp, script + "run 30 post no\nwrite_data " + data);
+  LAMMPS *lmp = open_lammps(MPI_COMM_WORLD, {"-log", log});
+  run_lines(lmp, script + "run 30 post no\nwrite_data " + data);
   const State before = state_of(lmp);
   delete lmp;
   if (world_rank() == 0) {
@@ -324,8 +324,8 @@ TEST_F(ClumpRestart, WriteDataWarnsAndReadDataRecoversTheClumps)
               std::string::npos);
   }
 
-  lmp = make_lammps(MPI_COMM_WORLD);
-  run_script(lmp, R"(
+  lmp = open_lammps(MPI_COMM_WORLD);
+  run_lines(lmp, R"(
 units si
 atom_style hybrid sphere charge
 atom_modify map array sort 0 0.0

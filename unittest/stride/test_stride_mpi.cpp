@@ -3,7 +3,6 @@
 // boundary (exchange, sort, reneighboring on every step), the trajectory equals the serial
 // one, and a restart split on 2 ranks equals the unsplit run. Run with mpirun -np 2.
 #include "lammps_fixture.h"
-#include "package_styles.h"
 #include "stride_test_util.h"
 
 #include "atom.h"
@@ -100,13 +99,7 @@ TEST_F(StrideMPI, HeldForcesFollowTheirAtomsAcrossRanks)
   // serial reference of the same 12 steps on rank 0
   double diff = 0.0;
   if (me == 0) {
-    std::vector<std::string> args = {"ref", "-log", "none", "-nocite"};
-    if (!std::getenv("KIFMM_TEST_VERBOSE")) args.insert(args.end(), {"-screen", "none"});
-    std::vector<char *> argv;
-    for (auto &a : args) argv.push_back(const_cast<char *>(a.c_str()));
-    argv.push_back(nullptr);
-    auto *ref = new LAMMPS_NS::LAMMPS((int) args.size(), argv.data(), MPI_COMM_SELF);
-    kifmm_lammps::add_package_styles(ref);
+    LAMMPS_NS::LAMMPS *ref = kifmm_test::open_lammps(MPI_COMM_SELF);
     LAMMPS_NS::LAMMPS *saved = lmp;
     lmp = ref;
     commands("units lj\natom_style charge\nboundary f f f\natom_modify map array\n"
@@ -114,10 +107,7 @@ TEST_F(StrideMPI, HeldForcesFollowTheirAtomsAcrossRanks)
              "kspace_style kifmm 1e-6\nfix nve all nve\ntimestep 0.05\natom_modify sort 1 0.5\n"
              "neigh_modify every 1 delay 0 check no\n"
              "fix st all kifmm/stride 5\nrun 0 post no\nrun 4 post no\nrun 8 post no");
-    std::map<int, Vec3> xs;
-    double **x = ref->atom->x;
-    for (int i = 0; i < ref->atom->nlocal; ++i)
-      xs[(int) ref->atom->tag[i]] = {x[i][0], x[i][1], x[i][2]};
+    const std::map<int, Vec3> xs = kifmm_test::positions_by_id(ref);
     lmp = saved;
     delete ref;
     diff = max_abs_diff(xs, x2);

@@ -96,35 +96,6 @@ std::vector<std::string> split(const char *s)
   return v;
 }
 
-// "Atoms # charge" section of a LAMMPS data file: id type q x y z
-bench::Points read_charge_data(const std::string &path)
-{
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot read " + path);
-  std::string line;
-  bool atoms = false;
-  bench::Points p;
-  while (std::getline(in, line)) {
-    if (line.rfind("Atoms", 0) == 0) {
-      atoms = true;
-      continue;
-    }
-    if (!atoms) continue;
-    std::istringstream ls(line);
-    long id;
-    int type;
-    double q, x, y, z;
-    if (!(ls >> id >> type >> q >> x >> y >> z)) {
-      if (!p.q.empty() && line.find_first_not_of(" \t\r") != std::string::npos) break;    // next section
-      continue;
-    }
-    if (q == 0.0) continue;
-    p.xyz.insert(p.xyz.end(), {x, y, z});
-    p.q.push_back(q);
-  }
-  return p;
-}
-
 // choose_tree(order, n, periodic) as it was at commit c4d85d4 (the choice the bench/solvers
 // campaign measured): constants of that fit, counts without the self-pair and entry terms
 int leaf_c4d85d4(int order, std::size_t n, bool periodic)

@@ -5,7 +5,10 @@
 #include "kifmm_point_sets.h"
 
 #include <cmath>
+#include <fstream>
 #include <random>
+#include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -46,6 +49,36 @@ inline double sampled_relative_rms(const std::vector<double> &grad,
       den += b * b;
     }
   return std::sqrt(num / den);
+}
+
+// The atoms of nonzero charge of the "Atoms # charge" section of a LAMMPS data file
+// (id type q x y z)
+inline Points read_charge_data(const std::string &path)
+{
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read " + path);
+  std::string line;
+  bool atoms = false;
+  Points p;
+  while (std::getline(in, line)) {
+    if (line.rfind("Atoms", 0) == 0) {
+      atoms = true;
+      continue;
+    }
+    if (!atoms) continue;
+    std::istringstream ls(line);
+    long id;
+    int type;
+    double q, x, y, z;
+    if (!(ls >> id >> type >> q >> x >> y >> z)) {
+      if (!p.q.empty() && line.find_first_not_of(" \t\r") != std::string::npos) break;    // next section
+      continue;
+    }
+    if (q == 0.0) continue;
+    p.xyz.insert(p.xyz.end(), {x, y, z});
+    p.q.push_back(q);
+  }
+  return p;
 }
 
 }    // namespace bench

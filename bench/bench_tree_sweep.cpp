@@ -1,0 +1,221 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
+// Automatic tree against a sweep of leaf sizes. For each point set, size and order: the tree
+// kspace_style kifmm takes on one rank without a leaf size (kifmm::plan_tree, then
+// kifmm::choose_tree_from_points on the points), and every distinct tree of a sweep of leaf
+// sizes (8 .. 8192, factor --factor; leaf sizes that give the same tree as a smaller one are
+// timed once). Single-thread CPU time per N-body evaluation (potential + gradient, sources =
+// targets), all candidates interleaved in rotating order for --reps rounds, each timed over at
+// least --min-time seconds. Printed per case: the automatic leaf and depth, the fastest swept
+// leaf and depth, their median times, and auto / best (median over the rounds of the per-round
+// ratios; 1.00 = the automatic tree is the fastest of the sweep).
+//   bench_tree_sweep [--sets uniform,plummer,clusters] [--sizes 1e3,1e4,1e5] [--orders 3,6,9,12]
+//                    [--periodic] [--reps 3] [--min-time 0.2] [--factor 1.41] [--data F.data,...]
+// Points: unittest/common/kifmm_point_sets.h (uniform in [-1,1]^3, Plummer sphere, two dense
+// clusters), or LAMMPS data files with "Atoms # charge" (id type q x y z). Periodic: the points
+// scaled into the cell [-1,1]^3, charges made neutral. Run with OMP_NUM_THREADS=1.
+#include "bench_points.h"
+#include "kifmm.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <ctime>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace {
+
+std::vector<std::string> split(const std::string &s)
+{
+  std::vector<std::string> v;
+  std::stringstream ss(s);
+  std::string tok;
+  while (std::getline(ss, tok, ','))
+    if (!tok.empty()) v.push_back(tok);
+  return v;
+}
+
+double cpu_now()
+{
+  timespec t;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return t.tv_sec + 1e-9 * t.tv_nsec;
+}
+
+double median(std::vector<double> v)
+{
+  std::sort(v.begin(), v.end());
+  const std::size_t k = v.size();
+  return k % 2 ? v[k / 2] : 0.5 * (v[k / 2 - 1] + v[k / 2]);
+}
+
+// points scaled into [-1,1]^3 (a small margin inside), charges shifted to a zero sum
+bench::Points into_cell(bench::Points p)
+{
+  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+  for (std::size_t i = 0; i < p.size(); ++i)
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::min(lo[d], p.xyz[3 * i + d]);
+      hi[d] = std::max(hi[d], p.xyz[3 * i + d]);
+    }
+  const double w = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-300});
+  double qsum = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    for (int d = 0; d < 3; ++d)
+      p.xyz[3 * i + d] = -0.999 + 1.998 * (p.xyz[3 * i + d] - 0.5 * (lo[d] + hi[d]) + 0.5 * w) / w;
+    qsum += p.q[i];
+  }
+  for (double &q : p.q) q -= qsum / p.size();
+  return p;
+}
+
+struct Candidate {
+  int leaf = 0, depth = 0;
+  std::vector<double> times;
+};
+
+struct Case {
+  std::string name;
+  bench::Points pts;
+};
+
+double time_evaluation(kifmm::Evaluator &ev, const bench::Points &p, std::vector<double> &pot,
+                       std::vector<double> &grad, double min_time)
+{
+  const std::size_t n = p.size();
+  int k = 0;
+  const double t0 = cpu_now();
+  double t = 0;
+  do {
+    ev.evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), grad.data());
+    ++k;
+    t = cpu_now() - t0;
+  } while (t < min_time);
+  return t / k;
+}
+
+void sweep(const Case &c, int order, bool periodic, int reps, double min_time, double factor)
+{
+  const std::size_t n = c.pts.size();
+  const kifmm::KernelSpec kernel;
+  kifmm::Options opt;
+  opt.order = order;
+  if (periodic) {
+    opt.periodic = true;
+    opt.fixed_root = true;
+    opt.root_half_width = 1.0;
+  }
+  // the automatic tree, as kspace_style kifmm takes it on one rank
+  const kifmm::TreeRequest request{n, 0, periodic ? -1 : 0, false};
+  kifmm::Options autom = kifmm::plan_tree(opt, request).options;
+  const kifmm::TreeChoice choice = kifmm::choose_tree_from_points(kernel, request, autom, n, c.pts.xyz.data());
+  // the sweep: distinct trees only (same depth and modelled cost = same tree)
+  std::vector<Candidate> cands;
+  std::map<std::pair<int, double>, int> seen;
+  for (double leaf = 8; leaf <= 8192 && leaf <= 2.0 * n; leaf *= factor) {
+    const int l = (int) std::lround(leaf);
+    kifmm::Options o = opt;
+    o.leaf_size = l;
+    const kifmm::TreeChoice m = kifmm::model_tree(kernel, o, n, c.pts.xyz.data(), l);
+    if (!seen.emplace(std::make_pair(m.depth, m.cost), l).second) continue;
+    cands.push_back(Candidate{l, m.depth, {}});
+  }
+  // the automatic tree is the last candidate (timed even if a swept leaf gives the same tree)
+  const int grid = autom.periodic_grid;
+  cands.push_back(Candidate{autom.leaf_size, choice.depth, {}});
+  std::vector<std::unique_ptr<kifmm::Evaluator>> evs;
+  for (std::size_t i = 0; i < cands.size(); ++i) {
+    kifmm::Options o = opt;
+    o.leaf_size = cands[i].leaf;
+    if (i + 1 == cands.size()) o = autom;
+    evs.push_back(kifmm::make_evaluator(kernel, o));
+  }
+  std::vector<double> pot(n), grad(3 * n);
+  for (auto &ev : evs)    // warm-up: operators, first-touch memory
+    ev->evaluate(n, c.pts.xyz.data(), c.pts.q.data(), n, c.pts.xyz.data(), pot.data(), grad.data());
+  for (std::size_t i = 0; i + 1 < cands.size(); ++i) cands[i].depth = evs[i]->stats().depth;
+  cands.back().depth = evs.back()->stats().depth;
+  const std::size_t m = cands.size();
+  for (int r = 0; r < reps; ++r)
+    for (std::size_t k = 0; k < m; ++k) {
+      const std::size_t i = (k + r) % m;
+      cands[i].times.push_back(time_evaluation(*evs[i], c.pts, pot, grad, min_time));
+    }
+  // fastest swept tree by median; auto / best per round
+  std::size_t best = 0;
+  for (std::size_t i = 1; i + 1 < m; ++i)
+    if (median(cands[i].times) < median(cands[best].times)) best = i;
+  std::vector<double> ratio;
+  for (int r = 0; r < reps; ++r) ratio.push_back(cands.back().times[r] / cands[best].times[r]);
+  const Candidate &a = cands.back(), &b = cands[best];
+  std::printf("| %s | %zu | %d | %s%d / %d | %d / %d | %.4g / %.4g | %.2f | %zu |\n", c.name.c_str(), n, order,
+              grid > 0 ? ("grid " + std::to_string(grid) + "^3, leaf ").c_str() : "", a.leaf, b.leaf, a.depth,
+              b.depth, median(a.times), median(b.times), median(ratio), m - 1);
+  std::fflush(stdout);
+}
+
+}    // namespace
+
+int main(int argc, char **argv)
+{
+  std::vector<std::string> sets = {"uniform", "plummer", "clusters"}, files;
+  std::vector<double> sizes = {1e3, 1e4, 1e5}, orders = {3, 6, 9, 12};
+  bool periodic = false;
+  int reps = 3;
+  double min_time = 0.2, factor = 1.41;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto next = [&]() -> std::string {
+      if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
+      return argv[++i];
+    };
+    auto numbers = [&](const std::string &s) {
+      std::vector<double> v;
+      for (auto &t : split(s)) v.push_back(std::atof(t.c_str()));
+      return v;
+    };
+    if (a == "--sets") sets = split(next());
+    else if (a == "--sizes") sizes = numbers(next());
+    else if (a == "--orders") orders = numbers(next());
+    else if (a == "--data") files = split(next());
+    else if (a == "--periodic") periodic = true;
+    else if (a == "--reps") reps = std::max(1, std::atoi(next().c_str()));
+    else if (a == "--min-time") min_time = std::atof(next().c_str());
+    else if (a == "--factor") factor = std::max(1.05, std::atof(next().c_str()));
+    else {
+      std::fprintf(stderr, "bench_tree_sweep: unknown option %s\n", a.c_str());
+      return 1;
+    }
+  }
+  std::vector<Case> cases;
+  for (double s : sizes)
+    for (const auto &name : sets) {
+      const std::size_t n = (std::size_t) s;
+      if (name == "uniform") cases.push_back({name, kifmm_points::uniform_cube(n, 1)});
+      else if (name == "plummer") cases.push_back({name, kifmm_points::plummer(n, 2)});
+      else if (name == "clusters") cases.push_back({name, kifmm_points::two_clusters(n, 3)});
+      else {
+        std::fprintf(stderr, "bench_tree_sweep: unknown point set %s\n", name.c_str());
+        return 1;
+      }
+    }
+  for (const auto &f : files) {
+    std::string base = f.substr(f.find_last_of('/') + 1);
+    cases.push_back({base.substr(0, base.find('.')), bench::read_charge_data(f)});
+  }
+  std::printf("%s boundaries; CPU s per evaluation, one thread (medians of %d rounds, each over >= %g s)\n\n",
+              periodic ? "periodic (cell [-1,1]^3, neutral charges)" : "open", reps, min_time);
+  std::printf("| points | N | p | leaf auto / best | depth auto / best | s auto / best | auto/best | trees swept |\n");
+  std::printf("|---|---|---|---|---|---|---|---|\n");
+  for (auto &c : cases) {
+    if (periodic) c.pts = into_cell(c.pts);
+    for (double p : orders) sweep(c, (int) p, periodic, reps, min_time, factor);
+  }
+  return 0;
+}

@@ -72,8 +72,8 @@ TEST(EngineKernels, P2PPairAccuracyOverManyScales)
       sq[j] = (j == k % 11) ? 1.0 : 0.0;
     }
     double tx = 0, ty = 0, tz = 0, p = 0, gx = 0, gy = 0, gz = 0;
-    kifmm::p2p<kifmm::LaplaceKernel, true, true, false>(kifmm::LaplaceKernel{}, 1, &tx, &ty, &tz, 11, sx, sy, sz, sq,
-                                                        &p, &gx, &gy, &gz);
+    kifmm::p2p<kifmm::LaplaceKernel, true, true, false>(kifmm::LaplaceKernel{}, {1, &tx, &ty, &tz}, {11, sx, sy, sz, sq},
+                                                        {&p, &gx, &gy, &gz});
     const int j = k % 11;
     const long double r = std::sqrt((long double) sx[j] * sx[j] + (long double) sy[j] * sy[j] + (long double) sz[j] * sz[j]);
     worst = std::max(worst, (double) std::fabs((p - 1 / r) * r));

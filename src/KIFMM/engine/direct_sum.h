@@ -42,12 +42,14 @@ std::size_t direct_sum_t(const K &k, std::size_t n_src, const double *src_xyz, c
       tz[i] = trg_xyz[3 * (i0 + i) + 2];
     }
     std::size_t z = 0;
+    const PointSpan trg{nt, tx, ty, tz, nullptr};
+    const ResultSpan res{p, gx, gy, gz};
     for (std::size_t j0 = 0; j0 < ns; j0 += kSB) {
-      const std::size_t nsb = std::min(kSB, ns - j0);
+      const PointSpan src{std::min(kSB, ns - j0), &sx[j0], &sy[j0], &sz[j0], &sq[j0]};
       if (grad)
-        p2p_pg<K, true>(k, pot != nullptr, nt, tx, ty, tz, nsb, &sx[j0], &sy[j0], &sz[j0], &sq[j0], p, gx, gy, gz, &z);
+        p2p_pg<K, true>(k, pot != nullptr, trg, src, res, &z);
       else if (pot)
-        p2p<K, true, false, true>(k, nt, tx, ty, tz, nsb, &sx[j0], &sy[j0], &sz[j0], &sq[j0], p, gx, gy, gz, &z);
+        p2p<K, true, false, true>(k, trg, src, res, &z);
     }
     zeros += z;
     for (std::size_t i = 0; i < nt; ++i) {

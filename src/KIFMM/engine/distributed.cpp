@@ -106,14 +106,13 @@ template <class F> void below(const TopTree &top, int c, F &&visit)
 
 }    // namespace
 
-void distributed_setup(Communicator &comm, int top_level, int leaf_size, int max_depth, int nsurf, bool pow2_root,
-                       const RootBox *fixed_root, bool periodic, std::size_t n, const double *xyz, const double *q,
-                       DistributedData &out)
+namespace {
+
+// Global root and counts (reductions); false when there are no points or no sources.
+bool global_root(Communicator &comm, const DistributedConfig &cfg, const LocalPoints &pts, DistributedData &out)
 {
-  out = DistributedData();
-  const int nranks = comm.size(), me = comm.rank();
-  leaf_size = std::max(leaf_size, 1);
-  max_depth = std::min(std::max(max_depth, 0), kMortonBits);
+  const std::size_t n = pts.n;
+  const double *xyz = pts.xyz, *q = pts.q;
   // root: bounding cube of all points (every point is a target), as bounding_cube()
   double b[6];
   for (int d = 0; d < 3; ++d) b[d] = b[3 + d] = std::numeric_limits<double>::max();
@@ -131,34 +130,88 @@ void distributed_setup(Communicator &comm, int top_level, int leaf_size, int max
   }
   out.global_points = cnt[0];
   out.global_sources = cnt[1];
-  if (cnt[0] == 0 || cnt[1] == 0) return;
-  if (fixed_root) out.root = *fixed_root;
+  if (cnt[0] == 0 || cnt[1] == 0) return false;
+  if (cfg.fixed_root) out.root = *cfg.fixed_root;
   else {
     const double lo[3] = {b[0], b[1], b[2]}, hi[3] = {-b[3], -b[4], -b[5]};
     out.root = bounding_cube_of(lo, hi);
-    if (pow2_root) out.root.half_width = std::exp2(std::ceil(std::log2(out.root.half_width)));
+    if (cfg.pow2_root) out.root.half_width = std::exp2(std::ceil(std::log2(out.root.half_width)));
   }
+  return true;
+}
 
-  // Top tree: the global tree refined from the root, level by level (one reduction of the
-  // children's counts per level), while a cell splits in the global tree and holds more than
-  // 2 N / 8^L points, L from choose_top_level: about 8^L frontier cells for uniform points,
-  // finer where the points are dense, so that no frontier cell holds much more than 2 N / 8^L
-  // points. Its size depends on L (on P), not on N.
-  const int L = std::min(top_level > 0 ? top_level : choose_top_level(cnt[0], nranks, nsurf, max_depth, leaf_size), max_depth);
-  const double refine_above = std::max((double) leaf_size, 2.0 * (double) cnt[0] / std::exp2(3 * L));
+// Children of the top cells `refine` (one level) from the global counts per octant (one
+// reduction); the points' top cells `at` move to the children; returns the new cells.
+std::vector<int> refine_top_level(Communicator &comm, const LocalPoints &pts, const std::vector<uint64_t> &keys,
+                                  const std::vector<int> &refine, std::vector<int> &at, DistributedData &out)
+{
+  TopTree &top = out.top;
+  std::vector<int> slot(top.cells.size(), -1), current;
+  for (std::size_t k = 0; k < refine.size(); ++k) slot[refine[k]] = (int) k;
+  const int level = top.cells[refine[0]].level;    // all cells of `current` share a level
+  const int shift = 3 * (kMortonBits - level - 1);
+  std::vector<uint64_t> counts(16 * refine.size(), 0);
+  for (std::size_t i = 0; i < pts.n; ++i) {
+    const int k = slot[at[i]];
+    if (k < 0) continue;
+    const int oct = (int) ((keys[i] >> shift) & 7);
+    counts[16 * (std::size_t) k + oct] += pts.q[i] != 0.0;
+    ++counts[16 * (std::size_t) k + 8 + oct];
+  }
+  {
+    Timer t(out.t_comm);
+    comm.allreduce_sum(counts.data(), counts.size());
+  }
+  for (std::size_t k = 0; k < refine.size(); ++k) {
+    const int c = refine[k];
+    const int first = (int) top.cells.size();
+    int nch = 0;
+    for (int oct = 0; oct < 8; ++oct) {
+      const uint64_t s = counts[16 * k + oct], t = counts[16 * k + 8 + oct];
+      if (s + t == 0) continue;
+      Cell ch = child_cell(top.cells[c], c, oct);
+      ch.gsrc = (uint32_t) s;
+      ch.gtrg = (uint32_t) t;
+      top.cells[c].child[oct] = (int) top.cells.size();
+      current.push_back((int) top.cells.size());
+      top.cells.push_back(ch);
+      ++nch;
+    }
+    top.cells[c].first_child = first;
+    top.cells[c].n_children = nch;
+  }
+  for (std::size_t i = 0; i < pts.n; ++i) {
+    const int k = slot[at[i]];
+    if (k >= 0) at[i] = top.cells[at[i]].child[(keys[i] >> shift) & 7];
+  }
+  return current;
+}
+
+// Top tree: the global tree refined from the root, level by level (one reduction of the
+// children's counts per level), while a cell splits in the global tree and holds more than
+// 2 N / 8^L points, L from choose_top_level: about 8^L frontier cells for uniform points,
+// finer where the points are dense, so that no frontier cell holds much more than 2 N / 8^L
+// points. Its size depends on L (on P), not on N. at: the frontier cell of every point.
+void build_top_tree(Communicator &comm, const DistributedConfig &cfg, const LocalPoints &pts, DistributedData &out,
+                    std::vector<int> &at)
+{
+  const int leaf_size = cfg.leaf_size, max_depth = cfg.max_depth, top_level = cfg.top_level;
+  const uint64_t npoints = out.global_points;
+  const int L = std::min(top_level > 0 ? top_level : choose_top_level(npoints, comm.size(), cfg.nsurf, max_depth, leaf_size),
+                         max_depth);
+  const double refine_above = std::max((double) leaf_size, 2.0 * (double) npoints / std::exp2(3 * L));
   const int deepest = std::min(max_depth, top_level > 0 ? L : L + 8);
   std::vector<uint64_t> keys;
-  morton_keys(out.root, n, xyz, keys);
+  morton_keys(out.root, pts.n, pts.xyz, keys);
   TopTree &top = out.top;
   {
     Cell rc;
-    rc.gsrc = (uint32_t) cnt[1];
-    rc.gtrg = (uint32_t) cnt[0];
+    rc.gsrc = (uint32_t) out.global_sources;
+    rc.gtrg = (uint32_t) npoints;
     top.cells.assign(1, rc);
   }
-  std::vector<int> at(n, 0);    // top cell of every point (ends at its frontier cell)
-  std::vector<int> current{0}, refine, slot;
-  std::vector<uint64_t> counts;
+  at.assign(pts.n, 0);
+  std::vector<int> current{0}, refine;
   while (!current.empty()) {
     refine.clear();
     for (int c : current) {
@@ -168,45 +221,7 @@ void distributed_setup(Communicator &comm, int top_level, int leaf_size, int max
       if (split && deeper) refine.push_back(c);
     }
     if (refine.empty()) break;
-    slot.assign(top.cells.size(), -1);
-    for (std::size_t k = 0; k < refine.size(); ++k) slot[refine[k]] = (int) k;
-    const int level = top.cells[refine[0]].level;    // all cells of `current` share a level
-    const int shift = 3 * (kMortonBits - level - 1);
-    counts.assign(16 * refine.size(), 0);
-    for (std::size_t i = 0; i < n; ++i) {
-      const int k = slot[at[i]];
-      if (k < 0) continue;
-      const int oct = (int) ((keys[i] >> shift) & 7);
-      counts[16 * (std::size_t) k + oct] += q[i] != 0.0;
-      ++counts[16 * (std::size_t) k + 8 + oct];
-    }
-    {
-      Timer t(out.t_comm);
-      comm.allreduce_sum(counts.data(), counts.size());
-    }
-    current.clear();
-    for (std::size_t k = 0; k < refine.size(); ++k) {
-      const int c = refine[k];
-      const int first = (int) top.cells.size();
-      int nch = 0;
-      for (int oct = 0; oct < 8; ++oct) {
-        const uint64_t s = counts[16 * k + oct], t = counts[16 * k + 8 + oct];
-        if (s + t == 0) continue;
-        Cell ch = child_cell(top.cells[c], c, oct);
-        ch.gsrc = (uint32_t) s;
-        ch.gtrg = (uint32_t) t;
-        top.cells[c].child[oct] = (int) top.cells.size();
-        current.push_back((int) top.cells.size());
-        top.cells.push_back(ch);
-        ++nch;
-      }
-      top.cells[c].first_child = first;
-      top.cells[c].n_children = nch;
-    }
-    for (std::size_t i = 0; i < n; ++i) {
-      const int k = slot[at[i]];
-      if (k >= 0) at[i] = top.cells[at[i]].child[(keys[i] >> shift) & 7];
-    }
+    current = refine_top_level(comm, pts, keys, refine, at, out);
   }
   const int ntop = (int) top.cells.size();
   top.open.assign(ntop, 0);
@@ -216,58 +231,80 @@ void distributed_setup(Communicator &comm, int top_level, int leaf_size, int max
     top.top_level = std::max(top.top_level, C.level);
     top.open[c] = C.n_children == 0 && C.level < max_depth && ((int) C.gsrc > leaf_size || (int) C.gtrg > leaf_size);
   }
-
   // frontier cells (top cells without children)
-  std::vector<int> findex(ntop, -1);
+  out.frontier_index.assign(ntop, -1);
   for (int c = 0; c < ntop; ++c)
     if (top.cells[c].n_children == 0) {
-      findex[c] = (int) out.frontier.size();
+      out.frontier_index[c] = (int) out.frontier.size();
       out.frontier.push_back(c);
     }
-  const int nf = (int) out.frontier.size();
-  out.frontier_index = findex;
   out.n_top_global = ntop;
   out.top_internal.assign(ntop, 0);
   for (int c = 0; c < ntop; ++c) out.top_internal[c] = top.cells[c].n_children > 0;
+}
 
-  // this rank's points by frontier cell (counting sort, input order inside a cell)
-  std::vector<int> fstart(nf + 1, 0), fpoints(n);
-  for (std::size_t i = 0; i < n; ++i) ++fstart[findex[at[i]] + 1];
-  for (int f = 0; f < nf; ++f) fstart[f + 1] += fstart[f];
+// This rank's points by frontier cell and the ranks that hold points of every frontier cell.
+struct FrontierOccupancy {
+  std::vector<int> fstart, fpoints;    // own points of frontier cell f: fpoints[fstart[f] .. fstart[f+1])
+  std::vector<int> mine;               // frontier cells this rank holds points of
+  std::vector<int> ostart, occ;        // ranks holding points of f: occ[ostart[f] .. ostart[f+1]), increasing
+};
+
+FrontierOccupancy frontier_occupancy(Communicator &comm, const LocalPoints &pts, const std::vector<int> &at,
+                                     DistributedData &out)
+{
+  const int nranks = comm.size(), me = comm.rank();
+  const int nf = (int) out.frontier.size();
+  const std::vector<int> &findex = out.frontier_index;
+  FrontierOccupancy o;
+  // counting sort, input order inside a cell
+  o.fstart.assign(nf + 1, 0);
+  o.fpoints.resize(pts.n);
+  for (std::size_t i = 0; i < pts.n; ++i) ++o.fstart[findex[at[i]] + 1];
+  for (int f = 0; f < nf; ++f) o.fstart[f + 1] += o.fstart[f];
   {
-    std::vector<int> pos(fstart.begin(), fstart.end() - 1);
-    for (std::size_t i = 0; i < n; ++i) fpoints[pos[findex[at[i]]]++] = (int) i;
+    std::vector<int> pos(o.fstart.begin(), o.fstart.end() - 1);
+    for (std::size_t i = 0; i < pts.n; ++i) o.fpoints[pos[findex[at[i]]]++] = (int) i;
   }
-  std::vector<int> mine, all, per_rank;
+  std::vector<int> all, per_rank;
   for (int f = 0; f < nf; ++f)
-    if (fstart[f + 1] > fstart[f]) mine.push_back(f);
+    if (o.fstart[f + 1] > o.fstart[f]) o.mine.push_back(f);
   {
     Timer t(out.t_comm);
-    comm.allgatherv(mine, all, per_rank);
+    comm.allgatherv(o.mine, all, per_rank);
   }
-  // occupants of every frontier cell (ranks in increasing order)
-  std::vector<int> ostart(nf + 1, 0), occ(all.size());
-  for (int f : all) ++ostart[f + 1];
-  for (int f = 0; f < nf; ++f) ostart[f + 1] += ostart[f];
+  o.ostart.assign(nf + 1, 0);
+  o.occ.resize(all.size());
+  for (int f : all) ++o.ostart[f + 1];
+  for (int f = 0; f < nf; ++f) o.ostart[f + 1] += o.ostart[f];
   {
-    std::vector<int> pos(ostart.begin(), ostart.end() - 1);
+    std::vector<int> pos(o.ostart.begin(), o.ostart.end() - 1);
     std::size_t k = 0;
     for (int r = 0; r < nranks; ++r)
-      for (int j = 0; j < per_rank[r]; ++j) occ[pos[all[k++]]++] = r;
+      for (int j = 0; j < per_rank[r]; ++j) o.occ[pos[all[k++]]++] = r;
   }
   out.responsible.assign(nf, 0);
-  for (int f = 0; f < nf; ++f) out.responsible[f] = ostart[f + 1] > ostart[f] && occ[ostart[f]] == me;
+  for (int f = 0; f < nf; ++f) out.responsible[f] = o.ostart[f + 1] > o.ostart[f] && o.occ[o.ostart[f]] == me;
   out.occupied.assign(nf, 0);
-  for (int f : mine) out.occupied[f] = 1;
+  for (int f : o.mine) out.occupied[f] = 1;
+  return o;
+}
 
-  // frontier cells whose points this rank needs (doc/design.md: rules i-iii); periodic: the
-  // neighbours through the cell's faces too (images). How: kWhole, all points from every rank
-  // holding some (the cells this rank holds points of, global leaves, and the small subtrees of
-  // rule iii); kLet, the other open cells: the part of their subtree this rank's lists reach,
-  // from the responsible rank (exchange_let)
-  enum : char { kNone = 0, kLet = 1, kWhole = 2 };
-  const Shifts shifts(periodic);
-  std::vector<char> need(nf, kNone), own_top(ntop, 0);
+enum : char { kNone = 0, kLet = 1, kWhole = 2 };
+
+// Frontier cells whose points this rank needs (doc/design.md: rules i-iii); periodic: the
+// neighbours through the cell's faces too (images). How: kWhole, all points from every rank
+// holding some (the cells this rank holds points of, global leaves, and the small subtrees of
+// rule iii); kLet, the other open cells: the part of their subtree this rank's lists reach,
+// from the responsible rank (exchange_let).
+std::vector<char> needed_frontier_cells(const DistributedConfig &cfg, const std::vector<int> &mine,
+                                        const DistributedData &out)
+{
+  const TopTree &top = out.top;
+  const int ntop = out.n_top_global;
+  const std::vector<int> &findex = out.frontier_index;
+  const Shifts shifts(cfg.periodic);
+  std::vector<char> need(out.frontier.size(), kNone), own_top(ntop, 0);
   auto mark = [&](int c) { need[findex[c]] = std::max<char>(need[findex[c]], kLet); };
   auto mark_whole = [&](int c) { need[findex[c]] = kWhole; };
   for (int f : mine) {
@@ -300,27 +337,36 @@ void distributed_setup(Communicator &comm, int top_level, int leaf_size, int max
           const Cell &D = top.cells[d];
           if (D.gsrc == 0) continue;
           if (cells_adjacent_shifted(D, sh.data(), B)) st.push_back(d);
-          else if (D.level > B.level && (int) D.gsrc <= nsurf) below(top, d, mark_whole);
+          else if (D.level > B.level && (int) D.gsrc <= cfg.nsurf) below(top, d, mark_whole);
         }
       }
     }
   }
+  return need;
+}
 
-  // requests: whole cells from each rank that holds points there; LETs later (exchange_let),
-  // from the responsible rank
-  // (a cell this rank holds points of and is responsible for comes whole; where another rank is
-  // responsible, that rank imports this rank's points of it and sends the LET of the rest)
+// Requests: whole cells from each rank that holds points there; LETs later (exchange_let), from
+// the responsible rank (a cell this rank holds points of and is responsible for comes whole;
+// where another rank is responsible, that rank imports this rank's points of it and sends the
+// LET of the rest). The whole cells' points are imported here (ghosts after the own points).
+void import_whole_cells(Communicator &comm, const LocalPoints &pts, const FrontierOccupancy &o,
+                        std::vector<char> &need, DistributedData &out)
+{
+  const int nranks = comm.size(), me = comm.rank();
+  const int nf = (int) out.frontier.size();
+  const std::size_t n = pts.n;
+  const double *xyz = pts.xyz, *q = pts.q;
   for (int f = 0; f < nf; ++f)
-    if (need[f] == kLet && (out.responsible[f] || !top.open[out.frontier[f]])) need[f] = kWhole;
+    if (need[f] == kLet && (out.responsible[f] || !out.top.open[out.frontier[f]])) need[f] = kWhole;
   out.complete.assign(nf, 0);
   for (int f = 0; f < nf; ++f) out.complete[f] = need[f] == kWhole;
   std::vector<std::vector<int>> req(nranks), got;
   out.let_from.assign(nranks, {});
   for (int f = 0; f < nf; ++f) {
     if (need[f] == kWhole)
-      for (int k = ostart[f]; k < ostart[f + 1]; ++k)
-        if (occ[k] != me) req[occ[k]].push_back(f);
-    if (need[f] == kLet && ostart[f + 1] > ostart[f]) out.let_from[occ[ostart[f]]].push_back(f);
+      for (int k = o.ostart[f]; k < o.ostart[f + 1]; ++k)
+        if (o.occ[k] != me) req[o.occ[k]].push_back(f);
+    if (need[f] == kLet && o.ostart[f + 1] > o.ostart[f]) out.let_from[o.occ[o.ostart[f]]].push_back(f);
   }
   uint64_t lets = 0;    // LETs this rank needs; summed: whether exchange_let runs at all
   for (const auto &v : out.let_from) lets += v.size();
@@ -333,8 +379,8 @@ void distributed_setup(Communicator &comm, int top_level, int leaf_size, int max
   std::vector<std::vector<double>> send(nranks), recv;
   for (int r = 0; r < nranks; ++r)
     for (int f : got[r]) {
-      for (int k = fstart[f]; k < fstart[f + 1]; ++k) {
-        const int i = fpoints[k];
+      for (int k = o.fstart[f]; k < o.fstart[f + 1]; ++k) {
+        const int i = o.fpoints[k];
         send[r].insert(send[r].end(), {xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2], q[i]});
       }
     }
@@ -362,6 +408,22 @@ void distributed_setup(Communicator &comm, int top_level, int leaf_size, int max
     }
 }
 
+}    // namespace
+
+void distributed_setup(Communicator &comm, const DistributedConfig &config, const LocalPoints &pts,
+                       DistributedData &out)
+{
+  out = DistributedData();
+  DistributedConfig cfg = config;
+  cfg.leaf_size = std::max(cfg.leaf_size, 1);
+  cfg.max_depth = std::min(std::max(cfg.max_depth, 0), kMortonBits);
+  if (!global_root(comm, cfg, pts, out)) return;
+  std::vector<int> at;    // top cell of every point (its frontier cell)
+  build_top_tree(comm, cfg, pts, out, at);
+  const FrontierOccupancy occupancy = frontier_occupancy(comm, pts, at, out);
+  std::vector<char> need = needed_frontier_cells(cfg, occupancy.mine, out);
+  import_whole_cells(comm, pts, occupancy, need, out);
+}
 
 namespace {
 
@@ -463,19 +525,16 @@ void let_fragment(const Octree &tree, int cf, const std::vector<AskingCell> &ask
 
 }    // namespace
 
-void exchange_let(Communicator &comm, const Octree &tree, std::size_t n_own, const std::vector<double> &up, int nsurf,
-                  bool periodic, DistributedData &dd)
+namespace {
+
+// Requests to the responsible ranks of the frontier cells in dd.let_from: per frontier cell F,
+// this rank's cells with own points that touch F, [f, count, count x (level, ix, iy, iz, kind)]
+// with kind 0 non-leaf, 1 leaf, 2 coarse (an incomplete frontier cell; F itself: the sender knows).
+std::vector<std::vector<int>> let_requests(int nranks, const Octree &tree, std::size_t n_own, const Shifts &shifts,
+                                           const DistributedData &dd)
 {
-  const int nranks = comm.size();
-  const Shifts shifts(periodic);
-  TopTree &top = dd.top;
   const int ntop = dd.n_top_global;
   const auto &cells = tree.cells;
-  std::vector<int> local_of(ntop, -1);
-  for (std::size_t c = 0; c < cells.size(); ++c)
-    if (tree.top_index[c] >= 0 && tree.top_index[c] < ntop) local_of[tree.top_index[c]] = (int) c;
-  // requests: per frontier cell F, this rank's cells with own points that touch F
-  // [f, count, count x (level, ix, iy, iz, leaf)]
   std::vector<uint32_t> own_before(tree.trg_order.size() + 1, 0);    // own targets before a sorted position
   for (std::size_t i = 0; i < tree.trg_order.size(); ++i) own_before[i + 1] = own_before[i] + (tree.trg_order[i] < n_own);
   auto holds_own = [&](const Cell &c) { return own_before[c.trg_end] > own_before[c.trg_begin]; };
@@ -483,11 +542,11 @@ void exchange_let(Communicator &comm, const Octree &tree, std::size_t n_own, con
     const int t = tree.top_index[c];
     return t >= 0 && t < ntop && dd.frontier_index[t] >= 0 && !dd.complete[dd.frontier_index[t]];
   };
-  std::vector<std::vector<int>> req(nranks), got;
+  std::vector<std::vector<int>> req(nranks);
   for (int r = 0; r < nranks; ++r)
     for (int f : dd.let_from[r]) {
       const int top_f = dd.frontier[f];
-      const Cell &F = top.cells[top_f];
+      const Cell &F = dd.top.cells[top_f];
       std::vector<int> &q = req[r];
       q.push_back(f);
       const std::size_t at = q.size();
@@ -498,7 +557,7 @@ void exchange_let(Communicator &comm, const Octree &tree, std::size_t n_own, con
         const Cell &C = cells[c];
         stack.pop_back();
         if (!holds_own(C) || !touch(C, F, shifts)) continue;
-        if (incomplete_frontier(c)) {    // 0 non-leaf, 1 leaf, 2 coarse (F itself: the sender knows)
+        if (incomplete_frontier(c)) {
           if (tree.top_index[c] != top_f) {
             q.insert(q.end(), {C.level, C.ix, C.iy, C.iz, 2});
             ++q[at];
@@ -510,13 +569,20 @@ void exchange_let(Communicator &comm, const Octree &tree, std::size_t n_own, con
         for (int k = 0; k < C.n_children; ++k) stack.push_back(C.first_child + k);
       }
     }
-  {
-    const double t0 = omp_get_wtime();
-    comm.alltoallv(req, got);
-    dd.t_comm += omp_get_wtime() - t0;
-  }
-  // fragments: per asking rank, [f, fragment] for each cell it asked for
-  std::vector<std::vector<double>> send(nranks), recv;
+  return req;
+}
+
+// Answers to the requests `got` (per asking rank r): [f, fragment] for each cell it asked for.
+std::vector<std::vector<double>> let_answers(const Octree &tree, const std::vector<double> &up, int nsurf,
+                                             const Shifts &shifts, const std::vector<std::vector<int>> &got,
+                                             DistributedData &dd)
+{
+  const int nranks = (int) got.size(), ntop = dd.n_top_global;
+  const auto &cells = tree.cells;
+  std::vector<int> local_of(ntop, -1);
+  for (std::size_t c = 0; c < cells.size(); ++c)
+    if (tree.top_index[c] >= 0 && tree.top_index[c] < ntop) local_of[tree.top_index[c]] = (int) c;
+  std::vector<std::vector<double>> send(nranks);
   for (int r = 0; r < nranks; ++r) {
     const std::vector<int> &g = got[r];
     for (std::size_t k = 0; k < g.size();) {
@@ -555,12 +621,14 @@ void exchange_let(Communicator &comm, const Octree &tree, std::size_t n_own, con
     }
     dd.let_bytes += sizeof(double) * send[r].size();
   }
-  {
-    const double t0 = omp_get_wtime();
-    comm.alltoallv(send, recv);
-    dd.t_comm += omp_get_wtime() - t0;
-  }
-  // append the received cells below their frontier cells, their densities and points
+  return send;
+}
+
+// The received fragments appended below their frontier cells: cells, densities and points.
+void append_let(const std::vector<std::vector<double>> &recv, int nsurf, DistributedData &dd)
+{
+  TopTree &top = dd.top;
+  const int ntop = dd.n_top_global;
   for (const auto &v : recv) {
     std::size_t k = 0;
     while (k < v.size()) {
@@ -597,6 +665,27 @@ void exchange_let(Communicator &comm, const Octree &tree, std::size_t n_own, con
       dd.let_cells += ncells;
     }
   }
+}
+
+}    // namespace
+
+void exchange_let(Communicator &comm, const Octree &tree, std::size_t n_own, const std::vector<double> &up, int nsurf,
+                  bool periodic, DistributedData &dd)
+{
+  const Shifts shifts(periodic);
+  std::vector<std::vector<int>> got;
+  {
+    const std::vector<std::vector<int>> req = let_requests(comm.size(), tree, n_own, shifts, dd);
+    Timer t(dd.t_comm);
+    comm.alltoallv(req, got);
+  }
+  const std::vector<std::vector<double>> send = let_answers(tree, up, nsurf, shifts, got, dd);
+  std::vector<std::vector<double>> recv;
+  {
+    Timer t(dd.t_comm);
+    comm.alltoallv(send, recv);
+  }
+  append_let(recv, nsurf, dd);
 }
 
 }    // namespace kifmm

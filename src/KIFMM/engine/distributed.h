@@ -48,17 +48,33 @@ struct DistributedData {
 constexpr double kGhostWork = 4096.0;
 int choose_top_level(uint64_t npoints, int nranks, int nsurf, int max_depth, int leaf_size);
 
-// Collective. n points of this rank (xyz interleaved, strengths q; every point is a target,
-// the ones with q != 0 are sources). top_level 0: adaptive top tree with L = choose_top_level
-// (refined where a cell holds more than 2 N / 8^L points); > 0: the top tree is the global tree
-// down to that level exactly (tests). pow2_root rounds the
-// root half-width up to a power of two (kernels with level-dependent operators), fixed_root
-// replaces the bounding cube. nsurf: equivalent surface size (W-list direct threshold).
-// periodic: fixed_root is the periodic cell (points already wrapped into it); cells are
-// neighbours also through the cell's faces (images with root shifts in {-1,0,1}^3), so the
-// ghost requests wrap around the boundary.
-void distributed_setup(Communicator &comm, int top_level, int leaf_size, int max_depth, int nsurf, bool pow2_root,
-                       const RootBox *fixed_root, bool periodic, std::size_t n, const double *xyz, const double *q,
+// Parameters of distributed_setup (from the evaluator's options).
+struct DistributedConfig {
+  // 0: adaptive top tree with L = choose_top_level (refined where a cell holds more than
+  // 2 N / 8^L points); > 0: the top tree is the global tree down to that level exactly (tests)
+  int top_level = 0;
+  int leaf_size = 1;
+  int max_depth = 20;
+  int nsurf = 0;                          // equivalent surface size (W-list direct threshold)
+  bool pow2_root = false;                 // root half-width rounded up to a power of two
+                                          // (kernels with level-dependent operators)
+  const RootBox *fixed_root = nullptr;    // instead of the bounding cube
+  // fixed_root is the periodic cell (points already wrapped into it); cells are neighbours also
+  // through the cell's faces (images with root shifts in {-1,0,1}^3), so the ghost requests
+  // wrap around the boundary
+  bool periodic = false;
+};
+
+// This rank's points: n, xyz interleaved, strengths q (every point is a target, the ones with
+// q != 0 are sources).
+struct LocalPoints {
+  std::size_t n = 0;
+  const double *xyz = nullptr, *q = nullptr;
+};
+
+// Collective: global root and counts, top tree, frontier cells, who holds what, and the import
+// of the whole cells' points (ghosts).
+void distributed_setup(Communicator &comm, const DistributedConfig &config, const LocalPoints &points,
                        DistributedData &out);
 
 // Locally essential trees (after distributed_setup, collective). tree: this rank's tree over

@@ -1,9 +1,14 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
-// Templated FMM core: FmmEvaluator<Kernel> implements kifmm::Evaluator for any kernel type
+// Templated FMM core: FmmEvaluator<K> implements kifmm::Evaluator for any kernel type
 // following kernels.h (tests instantiate it with their own kernel). Passes:
 //   tree (octree.h) -> lists (interaction_lists.h) -> operators (operator_cache.h) ->
 //   upward P2M/M2M -> M2L (FFT, m2l_fft.h) -> X (P2L) -> downward L2L -> leaf pass:
 //   P2P over U, W (M2P, or P2P for small leaves), L2P.
+// This file holds the class, the passes shared by every boundary and the steps of open
+// boundaries. The steps that depend on the boundary (wrap, lists, mutual plan, M2L of the top
+// levels, far and near images) are chosen once at construction (BoundarySteps: open here,
+// periodic in periodic_core.h); the periodic single-level grid is periodic_grid_core.h, the
+// distributed evaluation distributed_core.h.
 // When sources and targets are the same points (N-body), the U pairs are evaluated mutually:
 // each unordered pair of adjacent leaves once for both sides (p2p_mutual.h, MutualPlan).
 // Every pass is OpenMP-parallel over cells; each cell (or target leaf) writes only its own
@@ -62,6 +67,8 @@ template <class K> class FmmEvaluator : public Evaluator {
  public:
   FmmEvaluator(const K &k, const KernelSpec &spec, const Options &opt) : k_(k), spec_(spec), opt_(opt)
   {
+    boundary_ = opt_.periodic ? periodic_steps() : open_steps();
+    grid_ = opt_.periodic && opt_.periodic_grid > 0;
     p_ = std::min(std::max(opt_.order, 2), 16);
     opt_.order = p_;
     if (opt_.leaf_size <= 0) opt_.leaf_size = default_leaf_size(p_);
@@ -111,6 +118,24 @@ template <class K> class FmmEvaluator : public Evaluator {
     tree_.center(tree_.cells[c], ctr);
     box_surface(unit, ctr, tree_.half_width(tree_.cells[c].level), out);
   }
+  // near-field spans of the sorted points: sources (with strengths), targets, accumulators
+  PointSpan source_range(std::size_t s0, std::size_t n) const
+  {
+    return {n, sx_.data() + s0, sy_.data() + s0, sz_.data() + s0, sq_.data() + s0};
+  }
+  PointSpan source_span(const Cell &c) const { return source_range(c.src_begin, c.n_src()); }
+  PointSpan target_range(std::size_t t0, std::size_t n) const
+  {
+    return {n, tx_.data() + t0, ty_.data() + t0, tz_.data() + t0, nullptr};
+  }
+  PointSpan target_span(const Cell &c) const { return target_range(c.trg_begin, c.n_trg()); }
+  ResultSpan result_at(std::size_t t0) { return {tp_.data() + t0, tgx_.data() + t0, tgy_.data() + t0, tgz_.data() + t0}; }
+  ResultSpan result_span(const Cell &c) { return result_at(c.trg_begin); }
+  // surface points (with densities as strengths)
+  PointSpan surface_span(const SurfacePoints &s, const double *density) const
+  {
+    return {(std::size_t) nsurf_, s.x.data(), s.y.data(), s.z.data(), density};
+  }
   // X list of a small target leaf: direct P2P (cost n_src*n_trg) beats P2L (n_src*nsurf)
   bool x_direct(int b) const { return tree_.cells[b].leaf() && (int) tree_.cells[b].gtrg <= nsurf_; }
   void setup_operators(double &t_setup);
@@ -123,27 +148,73 @@ template <class K> class FmmEvaluator : public Evaluator {
   void reset_accumulators(std::size_t n_trg);
   // target results (sorted order) back to input order
   void results_to_input_order(std::size_t n_trg, double *pot, double *grad) const;
-  void m2l();
+  // M2L of the levels l_first .. depth (one FFT kernel per colleague slot)
+  void m2l_levels(int l_first);
   void p2l();
   void downward();
   void leaf_pass(bool want_pot, bool want_grad);
+  // the passes after the upward one: M2L, P2L and far images, L2L, leaf pass and near images
+  // (timings into stats_; own_sources, comm: see BoundarySteps::far)
+  void passes_after_upward(std::size_t own_sources, Communicator *comm, bool want_pot, bool want_grad);
+  // tree, lists, operators and all passes of one process's points (sources already without
+  // zero strengths, wrapped into the cell when periodic); t0: start of the evaluation
+  void evaluate_tree(double t0, std::size_t ns, const double *sxyz, const double *sq, std::size_t n_trg,
+                     const double *trg_xyz, double *pot, double *grad);
+  // the sorted sources are the sorted targets (same points, same order)
+  bool same_sorted_points() const
+  {
+    return sx_.size() == tx_.size() && tree_.src_order == tree_.trg_order && sx_ == tx_ && sy_ == ty_ && sz_ == tz_;
+  }
   // mutual near field (sources = targets): open boundaries use mutual_, periodic plists_
   MutualPlan mutual_;
   std::size_t mutual_near(bool want_pot, const std::vector<MutualPair> &pairs, const std::vector<int> &color_off,
                           const std::vector<int> &self_leaves, double L);
+
+  // ---- steps that depend on the boundary, chosen at construction: open_steps() (below),
+  // periodic_steps() (periodic_core.h). The shared passes call them through boundary_.
+  struct BoundarySteps {
+    int first_level;    // first level with expansions
+    // points into the box (periodic: copies wrapped into the cell; open: unchanged)
+    void (FmmEvaluator::*wrap)(std::size_t ns, const double *&sxyz, std::size_t nt, const double *&txyz);
+    void (FmmEvaluator::*lists)();    // interaction lists of tree_
+    // mutual near-field plan after the lists: own_only null (one process) when the sources are
+    // the targets; else (distributed) the leaves that hold only own points, all of them sources
+    void (FmmEvaluator::*plan_mutual)(const std::vector<char> *own_only);
+    void (FmmEvaluator::*m2l)();    // M2L of every level
+    // after P2L: the far images (own_sources: sources with sorted input index below it enter
+    // the background moments; comm: they are summed over its ranks)
+    void (FmmEvaluator::*far)(std::size_t own_sources, Communicator *comm);
+    void (FmmEvaluator::*near)(bool want_pot);    // after the leaf pass: the near images
+  };
+  BoundarySteps boundary_;
+  bool grid_ = false;    // periodic single-level grid instead of the octree
+  static BoundarySteps open_steps();
+  static BoundarySteps periodic_steps();
+  int first_level() const { return boundary_.first_level; }
+  // open boundaries
+  void open_wrap(std::size_t, const double *&, std::size_t, const double *&) {}
+  void open_lists() { build_interaction_lists(tree_, lists_); }
+  void open_plan_mutual(const std::vector<char> *own_only);
+  void open_m2l() { m2l_levels(2); }
+  void open_far(std::size_t, Communicator *) {}
+  void open_near(bool) {}
   // periodic boundaries (periodic.h, periodic_core.h)
   PeriodicImageLists plists_;
   std::shared_ptr<const LatticeTable> lattice_;
   std::vector<int> plattice_;
   std::vector<double> pwrap_src_, pwrap_trg_;
   double periodic_quad_ = 0.0, periodic_moments_[5] = {0, 0, 0, 0, 0};    // Laplace background part
-  int first_level() const { return opt_.periodic ? 0 : 2; }    // first level with expansions
   void periodic_wrap(std::size_t ns, const double *&sxyz, std::size_t nt, const double *&txyz);
-  // own_sources: sources with sorted input index below it enter the background moments
-  // (distributed: this rank's own sources; the moments are then summed over ranks)
-  void periodic_far(std::size_t own_sources = SIZE_MAX);
+  void periodic_lists() { build_periodic_interaction_lists(tree_, lists_, plists_); }
+  void periodic_plan_mutual(const std::vector<char> *own_only);
+  void periodic_m2l();
+  void periodic_far(std::size_t own_sources, Communicator *comm);
   void periodic_near(bool want_pot);
+  void periodic_root_operator();    // images beyond the first shell: the root's lattice operator
+  void periodic_image_p2l();        // X entries with an image shift
   void periodic_m2l_top(int level);    // levels 1, 2: colleague slots of one parent summed
+  std::vector<const double *> periodic_top_kernels(int l, const std::vector<uint32_t> &group_mask,
+                                                   const std::vector<std::vector<int>> &kid, int nblocks);
   void periodic_background_moments(double quad, const double c[3], std::size_t own_sources);
   void add_periodic_background(bool want_pot, const double c[3]);
   // periodic single-level grid of opt_.periodic_grid^3 cells (periodic_grid.h, periodic_grid_core.h)
@@ -151,6 +222,15 @@ template <class K> class FmmEvaluator : public Evaluator {
   std::vector<int> grid_src_begin_, grid_trg_begin_;    // per cell, sorted order (+ end)
   std::vector<int> grid_own_end_;                       // per cell: end of its own sources
   GridBuffer grid_spectra_;                             // spectra of all cells (convolution)
+  // distributed evaluation (distributed_core.h)
+  struct DistributedState;
+  void distributed_first_tree(Communicator &comm, std::size_t n, DistributedState &st);
+  void distributed_tree(std::size_t n, const double *xyz, DistributedState &st);
+  double distributed_upward(Communicator &comm, DistributedState &st);
+  std::vector<char> copied_densities(const DistributedState &st);
+  std::vector<char> own_only_leaves() const;
+  void fill_frontier_buf(const DistributedState &st, const std::vector<int> &local);
+  std::vector<int> local_of_top(int n_top_global) const;
   void evaluate_grid(std::size_t ns, const double *sxyz, const double *sq, std::size_t nt, const double *txyz,
                      double *pot, double *grad, bool same_points);
   void evaluate_grid_distributed(Communicator &comm, std::size_t n, const double *xyz, const double *q, double *pot,
@@ -160,6 +240,21 @@ template <class K> class FmmEvaluator : public Evaluator {
   void grid_bin(std::size_t ns, const double *sxyz, const double *sq, std::size_t nt, const double *txyz,
                 bool same_points, std::size_t own_sources);
   void grid_passes(Communicator *comm, std::size_t own_sources, bool want_pot, bool same_points);
+  struct GridGeometry {
+    int k = 0, kc = 0;                             // cells per side, cells
+    double H = 0, w = 0, h = 0, L = 0;             // cell half-width, grid cell width and half-width, period
+  };
+  static constexpr int kGridBatch = 64;            // cells per batched operator application
+  GridGeometry grid_geometry() const;
+  void grid_center(const GridGeometry &g, int b, double ctr[3]) const;
+  void grid_reduce(Communicator *comm, double *v, std::size_t m);    // sum over ranks (comm null: none)
+  void grid_operators(const GridGeometry &g);
+  void grid_p2m(const GridGeometry &g);
+  void grid_m2l(const GridGeometry &g, const std::vector<double> &occupied);
+  void grid_l2p(const GridGeometry &g, bool want_pot);
+  std::size_t grid_near_mutual(const GridGeometry &g, bool want_pot);
+  std::size_t grid_near_one_sided(const GridGeometry &g, bool want_pot);
+  void grid_wrap_correction(const GridGeometry &g, Communicator *comm, double quad, bool want_pot);
   // M2L layout of level l: source cells (children of a target parent's colleague) and target
   // cells (V non-empty) in slots of xhat_/yhat_ (sized here), and per parent of level l-1 the
   // spectra of its 8 children (xtab/ytab, nullptr where absent). False if no target.
@@ -214,7 +309,7 @@ template <class K> void FmmEvaluator<K>::setup_operators(double &t_setup)
     double s;
     const UnitKernel uk = make_unit_kernel(k_, tree_.half_width(l), s);
     scale_[l] = s;
-    if (l < first_level()) continue;    // levels 0,1 carry no expansions (non-periodic)
+    if (l < first_level()) continue;    // levels without expansions (open: 0, 1)
     if (level_independent_operators<K>() && l > 0 && ops_[l - 1]) {
       ops_[l] = ops_[l - 1];
       continue;
@@ -255,11 +350,8 @@ template <class K> void FmmEvaluator<K>::upward(int l_hi, int l_lo, bool m2m_onl
         if (!lv.empty()) {    // P2M
           chk.assign((std::size_t) nsurf_ * lv.size(), 0.0);
           for (std::size_t j = 0; j < lv.size(); ++j) {
-            const Cell &C = cells[lv[j]];
             cell_surface(lv[j], outer_, surf);
-            const std::size_t b = C.src_begin;
-            p2p<K, true, false, false>(k_, nsurf_, surf.x.data(), surf.y.data(), surf.z.data(), C.n_src(), &sx_[b],
-                                       &sy_[b], &sz_[b], &sq_[b], &chk[j * nsurf_], nullptr, nullptr, nullptr);
+            p2p<K, true, false, false>(k_, surface_span(surf, nullptr), source_span(cells[lv[j]]), {&chk[j * nsurf_]});
           }
           eq.resize(chk.size());
           apply_pinv_batch(op.uc2e_a, op.uc2e_b, nsurf_, op.rank, chk.data(), (int) lv.size(), eq.data(), inv_s);
@@ -360,7 +452,7 @@ template <class K> void FmmEvaluator<K>::results_to_input_order(std::size_t n_tr
   }
 }
 
-template <class K> void FmmEvaluator<K>::m2l()
+template <class K> void FmmEvaluator<K>::m2l_levels(int l_first)
 {
   const auto &cells = tree_.cells;
   const int nf = fft_->nfreq();
@@ -369,11 +461,7 @@ template <class K> void FmmEvaluator<K>::m2l()
   std::vector<double *> ytab;
   std::vector<std::pair<int, int>> pairs[27];
   std::vector<int> sources, targets;
-  for (int l = std::max(first_level(), 1); l <= tree_.depth; ++l) {
-    if (opt_.periodic && l <= 2) {    // periodic_core.h
-      periodic_m2l_top(l);
-      continue;
-    }
+  for (int l = std::max(l_first, 1); l <= tree_.depth; ++l) {
     const int p0 = tree_.level_begin[l - 1], p1 = tree_.level_begin[l];
     if (!m2l_level_layout(l, sources, targets, xtab, ytab)) continue;
     const int nsrc = (int) sources.size(), ntrg = (int) targets.size();
@@ -433,10 +521,7 @@ template <class K> void FmmEvaluator<K>::p2l()
       cell_surface(b, inner_, surf);
       double *chk = dcheck(b);
       for (const int *a = lists_.X.begin(b); a != lists_.X.end(b); ++a) {
-        const Cell &A = cells[*a];
-        const std::size_t s0 = A.src_begin;
-        p2p<K, true, false, false>(k_, nsurf_, surf.x.data(), surf.y.data(), surf.z.data(), A.n_src(), &sx_[s0],
-                                   &sy_[s0], &sz_[s0], &sq_[s0], chk, nullptr, nullptr, nullptr);
+        p2p<K, true, false, false>(k_, surface_span(surf, nullptr), source_span(cells[*a]), {chk});
       }
       has_local_[b] = 1;
     }
@@ -529,12 +614,9 @@ template <class K> void FmmEvaluator<K>::leaf_pass(bool want_pot, bool want_grad
         if (nr > 0 && ranges[nr - 1].second == ranges[i].first) ranges[nr - 1].second = ranges[i].second;
         else ranges[nr++] = ranges[i];
       }
-      const std::size_t t0i = B.trg_begin;
-      for (std::size_t r = 0; r < nr; ++r) {
-        const std::size_t s0 = ranges[r].first, ns = ranges[r].second - ranges[r].first;
-        p2p_pg<K, true>(k_, want_pot, B.n_trg(), &tx_[t0i], &ty_[t0i], &tz_[t0i], ns, &sx_[s0], &sy_[s0], &sz_[s0],
-                        &sq_[s0], &tp_[t0i], &tgx_[t0i], &tgy_[t0i], &tgz_[t0i], &zeros[li]);
-      }
+      for (std::size_t r = 0; r < nr; ++r)
+        p2p_pg<K, true>(k_, want_pot, target_span(B), source_range(ranges[r].first, ranges[r].second - ranges[r].first),
+                        result_span(B), &zeros[li]);
     }
   }
   double t1 = omp_get_wtime();
@@ -548,19 +630,15 @@ template <class K> void FmmEvaluator<K>::leaf_pass(bool want_pot, bool want_grad
       const int b = tree_.leaves[li];
       const Cell &B = cells[b];
       if (B.n_trg() == 0 || lists_.W.size(b) == 0) continue;
-      const std::size_t t0i = B.trg_begin;
       for (const int *a = lists_.W.begin(b); a != lists_.W.end(b); ++a) {
         const Cell &A = cells[*a];
         if (mutual_.active && A.leaf() && (int) A.gtrg <= mutual_.w_direct_max && (int) A.gsrc <= mutual_.w_direct_max)
           continue;    // in the mutual pairs (with the dual X entry)
         if ((int) A.gsrc <= nsurf_) {    // direct is cheaper than M2P (subtree sources are contiguous)
-          const std::size_t s0 = A.src_begin;
-          p2p_pg<K, false>(k_, want_pot, B.n_trg(), &tx_[t0i], &ty_[t0i], &tz_[t0i], A.n_src(), &sx_[s0], &sy_[s0],
-                           &sz_[s0], &sq_[s0], &tp_[t0i], &tgx_[t0i], &tgy_[t0i], &tgz_[t0i]);
+          p2p_pg<K, false>(k_, want_pot, target_span(B), source_span(A), result_span(B));
         } else {
           cell_surface(*a, inner_, surf);
-          p2p_pg<K, false>(k_, want_pot, B.n_trg(), &tx_[t0i], &ty_[t0i], &tz_[t0i], nsurf_, surf.x.data(),
-                           surf.y.data(), surf.z.data(), up(*a), &tp_[t0i], &tgx_[t0i], &tgy_[t0i], &tgz_[t0i]);
+          p2p_pg<K, false>(k_, want_pot, target_span(B), surface_span(surf, up(*a)), result_span(B));
         }
       }
     }
@@ -572,13 +650,8 @@ template <class K> void FmmEvaluator<K>::leaf_pass(bool want_pot, bool want_grad
     const Cell &B = cells[b];
     if (B.n_trg() == 0 || !x_direct(b)) continue;
     if (mutual_.active && mutual_.w_direct_max >= nsurf_) continue;    // in the mutual pairs
-    const std::size_t t0i = B.trg_begin;
-    for (const int *a = lists_.X.begin(b); a != lists_.X.end(b); ++a) {
-      const Cell &A = cells[*a];
-      const std::size_t s0 = A.src_begin;
-      p2p_pg<K, false>(k_, want_pot, B.n_trg(), &tx_[t0i], &ty_[t0i], &tz_[t0i], A.n_src(), &sx_[s0], &sy_[s0],
-                       &sz_[s0], &sq_[s0], &tp_[t0i], &tgx_[t0i], &tgy_[t0i], &tgz_[t0i]);
-    }
+    for (const int *a = lists_.X.begin(b); a != lists_.X.end(b); ++a)
+      p2p_pg<K, false>(k_, want_pot, target_span(B), source_span(cells[*a]), result_span(B));
   }
   double t2 = omp_get_wtime();
   stats_.t_wx += t2 - t1;
@@ -591,10 +664,8 @@ template <class K> void FmmEvaluator<K>::leaf_pass(bool want_pot, bool want_grad
       const int b = tree_.leaves[li];
       const Cell &B = cells[b];
       if (B.n_trg() == 0 || !has_local_[b]) continue;
-      const std::size_t t0i = B.trg_begin;
       cell_surface(b, outer_, surf);
-      p2p_pg<K, false>(k_, want_pot, B.n_trg(), &tx_[t0i], &ty_[t0i], &tz_[t0i], nsurf_, surf.x.data(),
-                       surf.y.data(), surf.z.data(), dequiv(b), &tp_[t0i], &tgx_[t0i], &tgy_[t0i], &tgz_[t0i]);
+      p2p_pg<K, false>(k_, want_pot, target_span(B), surface_span(surf, dequiv(b)), result_span(B));
     }
   }
   stats_.t_downward += omp_get_wtime() - t2;
@@ -617,16 +688,10 @@ std::size_t FmmEvaluator<K>::mutual_near(bool want_pot, const std::vector<Mutual
     const Cell &A = cells[a], &B = cells[b];
     // positions and strengths by the source ranges, accumulators by the target ranges (the
     // same points in the same order; the same ranges too unless ghosts are sources)
-    const std::size_t i0 = A.src_begin, j0 = B.src_begin, ti = A.trg_begin, tj = B.trg_begin;
+    const MutualSpan sa{source_span(A), result_span(A)}, sb{source_span(B), result_span(B)};
     std::size_t z = 0;
-    if (want_pot)
-      p2p_mutual<K, true>(k_, self_pair, A.n_src(), &sx_[i0], &sy_[i0], &sz_[i0], &sq_[i0], &tp_[ti], &tgx_[ti],
-                          &tgy_[ti], &tgz_[ti], B.n_src(), &sx_[j0], &sy_[j0], &sz_[j0], &sq_[j0], &tp_[tj],
-                          &tgx_[tj], &tgy_[tj], &tgz_[tj], sh, &z);
-    else
-      p2p_mutual<K, false>(k_, self_pair, A.n_src(), &sx_[i0], &sy_[i0], &sz_[i0], &sq_[i0], &tp_[ti], &tgx_[ti],
-                           &tgy_[ti], &tgz_[ti], B.n_src(), &sx_[j0], &sy_[j0], &sz_[j0], &sq_[j0], &tp_[tj],
-                           &tgx_[tj], &tgy_[tj], &tgz_[tj], sh, &z);
+    if (want_pot) p2p_mutual<K, true>(k_, self_pair, sa, sb, sh, &z);
+    else p2p_mutual<K, false>(k_, self_pair, sa, sb, sh, &z);
     return z;
   };
   (void) color_off;    // the pairs are stored by color; run_mutual_tasks keeps that order per leaf
@@ -634,6 +699,24 @@ std::size_t FmmEvaluator<K>::mutual_near(bool want_pot, const std::vector<Mutual
     const double sh[3] = {s[0] * L, s[1] * L, s[2] * L};
     return run(a, b, sh, self_pair);
   });
+}
+
+template <class K>
+void FmmEvaluator<K>::passes_after_upward(std::size_t own_sources, Communicator *comm, bool want_pot, bool want_grad)
+{
+  const double t4 = omp_get_wtime();
+  (this->*boundary_.m2l)();
+  const double t5 = omp_get_wtime();
+  stats_.t_m2l = t5 - t4;
+  p2l();
+  (this->*boundary_.far)(own_sources, comm);
+  const double t6 = omp_get_wtime();
+  stats_.t_wx = t6 - t5;
+  downward();
+  stats_.t_downward = omp_get_wtime() - t6;
+  leaf_pass(want_pot, want_grad);
+  mutual_.clear();
+  (this->*boundary_.near)(want_pot);
 }
 
 template <class K>
@@ -646,7 +729,7 @@ void FmmEvaluator<K>::evaluate(std::size_t n_src, const double *src_xyz, const d
   if (pot) std::fill(pot, pot + n_trg, 0.0);
   if (grad) std::fill(grad, grad + 3 * n_trg, 0.0);
   if (!pot && !grad) return;
-  double t = omp_get_wtime();
+  const double t = omp_get_wtime();
   // drop zero-strength sources
   std::vector<double> kxyz, kq;
   const double *sxyz = src_xyz, *sq = src_q;
@@ -654,51 +737,54 @@ void FmmEvaluator<K>::evaluate(std::size_t n_src, const double *src_xyz, const d
   stats_.n_sources = ns;
   if (ns == 0) return;
   const bool same_arrays = src_xyz == trg_xyz;
-  if (opt_.periodic) periodic_wrap(ns, sxyz, n_trg, trg_xyz);
-  if (opt_.periodic && opt_.periodic_grid > 0) {
-    evaluate_grid(ns, sxyz, sq, n_trg, trg_xyz, pot, grad, same_arrays && ns == n_src && n_src == n_trg);
-    if (same_arrays && n_src == n_trg && stats_.coincident_pairs >= ns) stats_.coincident_pairs -= ns;
-    return;
-  }
+  (this->*boundary_.wrap)(ns, sxyz, n_trg, trg_xyz);
+  if (grid_) evaluate_grid(ns, sxyz, sq, n_trg, trg_xyz, pot, grad, same_arrays && ns == n_src && n_src == n_trg);
+  else evaluate_tree(t, ns, sxyz, sq, n_trg, trg_xyz, pot, grad);
+  // self pairs (same arrays) are not coincident pairs
+  if (same_arrays && n_src == n_trg && stats_.coincident_pairs >= ns) stats_.coincident_pairs -= ns;
+}
+
+template <class K>
+void FmmEvaluator<K>::evaluate_tree(double t0, std::size_t ns, const double *sxyz, const double *sq,
+                                    std::size_t n_trg, const double *trg_xyz, double *pot, double *grad)
+{
   const RootBox root = evaluation_root(opt_.fixed_root, opt_.root_center, opt_.root_half_width,
                                        !level_independent_operators<K>(), ns, sxyz, n_trg, trg_xyz);
   build_octree(tree_, root, ns, sxyz, n_trg, trg_xyz, opt_.leaf_size, opt_.max_depth);
   sorted_copies(ns, sxyz, sq, n_trg, trg_xyz);
-  double t1 = omp_get_wtime();
-  stats_.t_tree = t1 - t;
-  if (opt_.periodic) build_periodic_interaction_lists(tree_, lists_, plists_);
-  else build_interaction_lists(tree_, lists_);
-  // N-body (the sources are the targets, same order): mutual near field
-  mutual_.clear();
-  if (!opt_.periodic && ns == n_trg && tree_.src_order == tree_.trg_order && sx_ == tx_ && sy_ == ty_ && sz_ == tz_)
-    plan_mutual_open(tree_, lists_, mutual_, nsurf_);    // U, and W/X pairs of small leaves
-  double t2 = omp_get_wtime();
+  const double t1 = omp_get_wtime();
+  stats_.t_tree = t1 - t0;
+  (this->*boundary_.lists)();
+  (this->*boundary_.plan_mutual)(nullptr);    // N-body (the sources are the targets): mutual near field
+  const double t2 = omp_get_wtime();
   stats_.t_lists = t2 - t1;
   tree_stats_and_operators();
-  double t3 = omp_get_wtime();
+  const double t3 = omp_get_wtime();
   reset_accumulators(n_trg);
   upward(tree_.depth, first_level(), false);
-  double t4 = omp_get_wtime();
-  stats_.t_upward = t4 - t3;
-  m2l();
-  double t5 = omp_get_wtime();
-  stats_.t_m2l = t5 - t4;
-  p2l();
-  if (opt_.periodic) periodic_far();
-  double t6 = omp_get_wtime();
-  stats_.t_wx = t6 - t5;
-  downward();
-  stats_.t_downward = omp_get_wtime() - t6;
-  leaf_pass(pot != nullptr, grad != nullptr);
-  mutual_.clear();    // (evaluate_distributed's leaf pass is one-sided)
-  if (opt_.periodic) periodic_near(pot != nullptr);
-
+  stats_.t_upward = omp_get_wtime() - t3;
+  passes_after_upward(SIZE_MAX, nullptr, pot != nullptr, grad != nullptr);
   results_to_input_order(n_trg, pot, grad);
-  // self pairs (same arrays) are not coincident pairs
-  if (same_arrays && n_src == n_trg && stats_.coincident_pairs >= ns) stats_.coincident_pairs -= ns;
   stats_.tree_bytes = tree_.bytes() + lists_.bytes() +
       sizeof(double) * (up_equiv_.size() + dn_check_.size() + dn_equiv_.size() + xhat_.capacity() + yhat_.capacity() +
                         sx_.size() * 4 + tx_.size() * 7);
+}
+
+// ---- open boundaries
+
+template <class K> typename FmmEvaluator<K>::BoundarySteps FmmEvaluator<K>::open_steps()
+{
+  return {2, &FmmEvaluator::open_wrap, &FmmEvaluator::open_lists, &FmmEvaluator::open_plan_mutual,
+          &FmmEvaluator::open_m2l, &FmmEvaluator::open_far, &FmmEvaluator::open_near};
+}
+
+// one process: U pairs and the W/X pairs of small leaves (plan_mutual_open); distributed: the U
+// pairs of the leaves in own_only (plan_mutual_partial), the rest one-sided
+template <class K> void FmmEvaluator<K>::open_plan_mutual(const std::vector<char> *own_only)
+{
+  mutual_.clear();
+  if (own_only) plan_mutual_partial(tree_, lists_, *own_only, mutual_);
+  else if (same_sorted_points()) plan_mutual_open(tree_, lists_, mutual_, nsurf_);
 }
 
 }    // namespace kifmm

@@ -13,99 +13,185 @@ std::size_t InteractionLists::bytes() const
   return b;
 }
 
+void colleague_shift(const Cell &c, int slot, int shift[3])
+{
+  const int d[3] = {slot / 9 - 1, (slot / 3) % 3 - 1, slot % 3 - 1};
+  const int a[3] = {c.ix, c.iy, c.iz};
+  const long long n = 1LL << c.level;
+  for (int k = 0; k < 3; ++k) {
+    const long long g = a[k] + d[k];
+    shift[k] = g < 0 ? -1 : (g >= n ? 1 : 0);
+  }
+}
+
 namespace {
 
-void flatten(const std::vector<std::vector<int>> &rows, CellList &out)
+struct Entry {
+  int cell;
+  signed char s[3];
+};
+using Rows = std::vector<std::vector<Entry>>;
+
+bool zero_shift(const signed char s[3])
 {
-  out.off.assign(rows.size() + 1, 0);
-  for (std::size_t i = 0; i < rows.size(); ++i) out.off[i + 1] = out.off[i] + (int) rows[i].size();
-  out.idx.resize(out.off.back());
-  for (std::size_t i = 0; i < rows.size(); ++i) std::copy(rows[i].begin(), rows[i].end(), out.idx.begin() + out.off[i]);
+  return s[0] == 0 && s[1] == 0 && s[2] == 0;
+}
+
+// Rows of entries into compressed rows: shift 0 -> plain (sorted by cell when sort_plain),
+// others -> img (build order). img null: every shift is 0.
+void split(const Rows &rows, CellList &plain, ImageList *img, bool sort_plain)
+{
+  const std::size_t n = rows.size();
+  plain.off.assign(n + 1, 0);
+  if (img) img->off.assign(n + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    int ni = 0;
+    if (img)
+      for (const Entry &e : rows[i]) ni += !zero_shift(e.s);
+    plain.off[i + 1] = plain.off[i] + (int) rows[i].size() - ni;
+    if (img) img->off[i + 1] = img->off[i] + ni;
+  }
+  plain.idx.resize(plain.off.back());
+  if (img) {
+    img->idx.resize(img->off.back());
+    img->shift.resize(3 * (std::size_t) img->off.back());
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    int kp = plain.off[i], ki = img ? img->off[i] : 0;
+    for (const Entry &e : rows[i]) {
+      if (!img || zero_shift(e.s)) {
+        plain.idx[kp++] = e.cell;
+      } else {
+        img->idx[ki] = e.cell;
+        std::copy(e.s, e.s + 3, &img->shift[3 * (std::size_t) ki]);
+        ++ki;
+      }
+    }
+    if (sort_plain) std::sort(plain.idx.begin() + plain.off[i], plain.idx.begin() + plain.off[i + 1]);
+  }
+}
+
+// Colleagues, V and the coarse leaves (adjacent to B: coarse_adj; else X) of cell b.
+template <class Images>
+void colleagues_v_x(const Octree &tree, InteractionLists &lists, int b, Rows &V, Rows &X, Rows &coarse_adj)
+{
+  const auto &cells = tree.cells;
+  const Cell &B = cells[b];
+  const int p = B.parent;
+  const Cell &P = cells[p];
+  auto &col = lists.colleagues[b];
+  const int64_t period = int64_t(1) << B.level;
+  // colleagues: children of the parent's colleagues (images) that touch B
+  for (int s = 0; s < 27; ++s) {
+    const int pc = lists.colleagues[p][s];
+    if (pc < 0) continue;
+    Entry e{-1, {0, 0, 0}};
+    Images::shift(P, s, e.s);
+    const Cell &C = cells[pc];
+    for (int k = 0; k < C.n_children; ++k) {
+      e.cell = C.first_child + k;
+      const Cell &D = cells[e.cell];
+      const int64_t dx = D.ix + e.s[0] * period - B.ix, dy = D.iy + e.s[1] * period - B.iy,
+                    dz = D.iz + e.s[2] * period - B.iz;
+      if (dx >= -1 && dx <= 1 && dy >= -1 && dy <= 1 && dz >= -1 && dz <= 1)
+        col[(dx + 1) * 9 + (dy + 1) * 3 + (dz + 1)] = e.cell;
+      else if (D.gsrc > 0 && B.n_trg() > 0)
+        V[b].push_back(e);    // child of a parent's colleague, not adjacent
+    }
+  }
+  // leaves coarser than B adjacent to parent(B): split into adjacent (kept) and X
+  auto consider = [&](const Entry &a) {
+    if (Images::adjacent(cells[a.cell], a.s, B)) coarse_adj[b].push_back(a);
+    else if (B.n_trg() > 0) X[b].push_back(a);
+  };
+  for (const Entry &a : coarse_adj[p]) consider(a);
+  for (int s = 0; s < 27; ++s) {
+    const int pc = lists.colleagues[p][s];
+    if (s == 13 || pc < 0) continue;
+    if (cells[pc].leaf() && cells[pc].gsrc > 0) {
+      Entry e{pc, {0, 0, 0}};
+      Images::shift(P, s, e.s);
+      consider(e);
+    }
+  }
+}
+
+// U and W of target leaf b: the coarse adjacent leaves, then the descent of the colleagues
+// (B itself included: a leaf with possibly sources).
+template <class Images>
+void leaf_u_w(const Octree &tree, const InteractionLists &lists, int b, const Rows &coarse_adj, Rows &U, Rows &W)
+{
+  const auto &cells = tree.cells;
+  const Cell &B = cells[b];
+  auto &u = U[b];
+  for (const Entry &a : coarse_adj[b]) u.push_back(a);
+  std::vector<Entry> stack;
+  for (int s = 0; s < 27; ++s) {
+    const int c = lists.colleagues[b][s];
+    if (c < 0 || cells[c].gsrc == 0) continue;
+    Entry e{c, {0, 0, 0}};
+    Images::shift(B, s, e.s);
+    if (cells[c].leaf()) u.push_back(e);
+    else stack.push_back(e);
+  }
+  while (!stack.empty()) {
+    const Entry e = stack.back();
+    stack.pop_back();
+    const Cell &C = cells[e.cell];
+    for (int k = 0; k < C.n_children; ++k) {
+      const Entry d{C.first_child + k, {e.s[0], e.s[1], e.s[2]}};
+      const Cell &D = cells[d.cell];
+      if (D.gsrc == 0) continue;
+      if (!Images::adjacent(D, d.s, B)) W[b].push_back(d);
+      else if (D.leaf()) u.push_back(d);
+      else stack.push_back(d);
+    }
+  }
 }
 
 }    // namespace
 
-void build_interaction_lists(const Octree &tree, InteractionLists &lists)
+template <class Images> void build_lists(const Octree &tree, InteractionLists &lists, ImageLists *images)
 {
+  if (!Images::kImages) images = nullptr;
   const auto &cells = tree.cells;
   const int n = (int) cells.size();
   lists.colleagues.assign(n, {});
   for (auto &c : lists.colleagues) c.fill(-1);
-  std::vector<std::vector<int>> U(n), V(n), W(n), X(n);
-  std::vector<std::vector<int>> coarse_adj(n);    // leaves with sources, coarser than B, adjacent to B
+  Rows U(n), V(n), W(n), X(n);
+  Rows coarse_adj(n);    // leaves with sources, coarser than B, adjacent to B
   if (n == 0) return;
-  lists.colleagues[0][13] = 0;
+  Images::root_colleagues(lists.colleagues[0]);
 
   const int nlev = (int) tree.level_begin.size() - 1;
   for (int l = 1; l < nlev; ++l) {
 #pragma omp parallel for schedule(dynamic, 16) if (tree.level_begin[l + 1] - tree.level_begin[l] > 512)
-    for (int b = tree.level_begin[l]; b < tree.level_begin[l + 1]; ++b) {
-      const Cell &B = cells[b];
-      const int p = B.parent;
-      auto &col = lists.colleagues[b];
-      // colleagues: children of the parent's colleagues that touch B
-      for (int pc : lists.colleagues[p]) {
-        if (pc < 0) continue;
-        const Cell &C = cells[pc];
-        for (int k = 0; k < C.n_children; ++k) {
-          const int d = C.first_child + k;
-          const Cell &D = cells[d];
-          const int dx = D.ix - B.ix, dy = D.iy - B.iy, dz = D.iz - B.iz;
-          if (dx >= -1 && dx <= 1 && dy >= -1 && dy <= 1 && dz >= -1 && dz <= 1)
-            col[(dx + 1) * 9 + (dy + 1) * 3 + (dz + 1)] = d;
-          else if (D.gsrc > 0 && B.n_trg() > 0)
-            V[b].push_back(d);    // child of a parent's colleague, not adjacent
-        }
-      }
-      // leaves coarser than B adjacent to parent(B): split into adjacent (kept) and X
-      auto consider = [&](int a) {
-        if (cells_adjacent(cells[a], B)) coarse_adj[b].push_back(a);
-        else if (B.n_trg() > 0) X[b].push_back(a);
-      };
-      for (int a : coarse_adj[p]) consider(a);
-      for (int s = 0; s < 27; ++s) {
-        const int pc = lists.colleagues[p][s];
-        if (s == 13 || pc < 0) continue;
-        if (cells[pc].leaf() && cells[pc].gsrc > 0) consider(pc);
-      }
-    }
+    for (int b = tree.level_begin[l]; b < tree.level_begin[l + 1]; ++b)
+      colleagues_v_x<Images>(tree, lists, b, V, X, coarse_adj);
   }
-  // U and W for target leaves
 #pragma omp parallel for schedule(dynamic, 16) if (tree.leaves.size() > 512)
   for (int li = 0; li < (int) tree.leaves.size(); ++li) {
     const int b = tree.leaves[li];
-    const Cell &B = cells[b];
-    if (B.n_trg() == 0) continue;
-    auto &u = U[b];
-    for (int a : coarse_adj[b]) u.push_back(a);
-    // descend the colleagues (B itself included: it is a leaf with possibly sources)
-    std::vector<int> stack;
-    for (int s = 0; s < 27; ++s) {
-      const int c = lists.colleagues[b][s];
-      if (c < 0 || cells[c].gsrc == 0) continue;
-      if (cells[c].leaf()) u.push_back(c);
-      else stack.push_back(c);
-    }
-    while (!stack.empty()) {
-      const int c = stack.back();
-      stack.pop_back();
-      const Cell &C = cells[c];
-      for (int k = 0; k < C.n_children; ++k) {
-        const int d = C.first_child + k;
-        const Cell &D = cells[d];
-        if (D.gsrc == 0) continue;
-        if (!cells_adjacent(D, B)) W[b].push_back(d);
-        else if (D.leaf()) u.push_back(d);
-        else stack.push_back(d);
-      }
-    }
-    std::sort(u.begin(), u.end());
-    std::sort(W[b].begin(), W[b].end());
+    if (cells[b].n_trg() > 0) leaf_u_w<Images>(tree, lists, b, coarse_adj, U, W);
   }
-  flatten(U, lists.U);
-  flatten(V, lists.V);
-  flatten(W, lists.W);
-  flatten(X, lists.X);
+  split(U, lists.U, images ? &images->U : nullptr, true);
+  split(W, lists.W, images ? &images->W : nullptr, true);
+  split(X, lists.X, images ? &images->X : nullptr, false);
+  // V: all entries in the plain list (M2L takes the geometry from the colleague slot)
+  split(V, lists.V, nullptr, false);
+  if (images) {
+    images->V_shift.clear();
+    for (int i = 0; i < n; ++i)
+      for (const Entry &e : V[i]) images->V_shift.insert(images->V_shift.end(), e.s, e.s + 3);
+  }
+}
+
+template void build_lists<OpenImages>(const Octree &, InteractionLists &, ImageLists *);
+template void build_lists<PeriodicImages>(const Octree &, InteractionLists &, ImageLists *);
+
+void build_interaction_lists(const Octree &tree, InteractionLists &lists)
+{
+  build_lists<OpenImages>(tree, lists, nullptr);
 }
 
 void color_mutual_pairs(int n_cells, std::vector<MutualPair> &pairs, std::vector<int> &color_off)

@@ -10,7 +10,9 @@
 // target leaf receives every source exactly once through U, W of itself and V, X of itself
 // and its ancestors (tested symbolically in unittest/engine/test_tree.cpp).
 // Colleagues: the (up to) 27 same-level cells touching B, by offset slot
-// (dx+1)*9 + (dy+1)*3 + (dz+1); slot 13 is B itself; -1 when absent.
+// (dx+1)*9 + (dy+1)*3 + (dz+1); slot 13 is B itself; -1 when absent. Open and periodic
+// boundaries share the builder: an image policy (OpenImages, PeriodicImages) says which
+// images of the cells are neighbours.
 #pragma once
 
 #include "octree.h"
@@ -33,6 +35,57 @@ struct InteractionLists {
   std::size_t bytes() const;
 };
 
+// Compressed rows of (cell, root shift) entries; shift has 3 values in {-1,0,1} per entry.
+struct ImageList {
+  std::vector<int> off, idx;
+  std::vector<signed char> shift;
+  int size(int i) const { return off.empty() ? 0 : off[i + 1] - off[i]; }
+  int begin(int i) const { return off[i]; }
+  int end(int i) const { return off[i + 1]; }
+  const signed char *shift_of(int e) const { return &shift[3 * (std::size_t) e]; }
+};
+
+// List entries whose source cell is an image of a tree cell (periodic boundaries: the root is
+// the periodic cell and a colleague across its faces is an image with a root shift n in
+// {-1,0,1}^3). Entries with n = 0 are in InteractionLists; these hold the ones with n != 0.
+struct ImageLists {
+  ImageList U, W, X;
+  std::vector<signed char> V_shift;    // shift of every entry of InteractionLists::V (tests)
+};
+
+// Image policies of the list builder: which images of the cells exist.
+//   OpenImages      no images: the root has no colleagues but itself, every shift is 0;
+//   PeriodicImages  the colleague of cell B at offset d is the cell at B + d modulo the cells
+//                   of the level, an image with the root shift of colleague_shift; the root's
+//                   27 colleagues are its own images.
+struct OpenImages {
+  static constexpr bool kImages = false;
+  static void root_colleagues(std::array<int, 27> &col) { col[13] = 0; }
+  static void shift(const Cell &, int, signed char s[3]) { s[0] = s[1] = s[2] = 0; }
+  static bool adjacent(const Cell &a, const signed char *, const Cell &b) { return cells_adjacent(a, b); }
+};
+
+// Root shift of the colleague at slot s ((dx+1)*9+(dy+1)*3+(dz+1)) of cell c (periodic tree).
+void colleague_shift(const Cell &c, int slot, int shift[3]);
+
+struct PeriodicImages {
+  static constexpr bool kImages = true;
+  static void root_colleagues(std::array<int, 27> &col) { col.fill(0); }
+  static void shift(const Cell &c, int slot, signed char s[3])
+  {
+    int t[3];
+    colleague_shift(c, slot, t);
+    for (int k = 0; k < 3; ++k) s[k] = (signed char) t[k];
+  }
+  static bool adjacent(const Cell &a, const signed char *s, const Cell &b) { return cells_adjacent_shifted(a, s, b); }
+};
+
+// The list builder: U, V, W, X and colleagues of every cell under the image policy; entries
+// with a nonzero shift go to `images` (PeriodicImages; null with OpenImages). Plain U and W
+// rows are sorted by cell, V and X rows and the image rows are in build order (deterministic).
+template <class Images> void build_lists(const Octree &tree, InteractionLists &lists, ImageLists *images);
+
+// Open boundaries: build_lists<OpenImages>. (Periodic: build_periodic_interaction_lists, periodic.h.)
 void build_interaction_lists(const Octree &tree, InteractionLists &lists);
 
 // Mutual near field (sources and targets are the same points): every unordered pair of

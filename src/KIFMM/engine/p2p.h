@@ -19,16 +19,29 @@
 
 namespace kifmm {
 
+// Points of a near-field call (structure of arrays): n points at x, y, z with strengths q
+// (sources; targets leave q null).
+struct PointSpan {
+  std::size_t n = 0;
+  const double *x = nullptr, *y = nullptr, *z = nullptr, *q = nullptr;
+};
+
+// Accumulators of the targets (results are ADDED): potential and gradient components; a
+// component that is not computed may be null.
+struct ResultSpan {
+  double *pot = nullptr, *gx = nullptr, *gy = nullptr, *gz = nullptr;
+};
+
 #if defined(__AVX512F__)
 // Laplace with AVX-512: 1/sqrt from vrsqrt14pd (14 bits) refined by one 4th-order step
 // (relative error ~1e-16, full double accuracy), 8 sources per step, masked tail and r = 0.
 template <bool POT, bool GRAD, bool COUNT>
-inline void p2p_laplace_avx512(std::size_t nt, const double *__restrict tx, const double *__restrict ty,
-                               const double *__restrict tz, std::size_t ns, const double *__restrict sx,
-                               const double *__restrict sy, const double *__restrict sz,
-                               const double *__restrict sq, double *__restrict pot, double *__restrict gx,
-                               double *__restrict gy, double *__restrict gz, std::size_t *n_zero)
+inline void p2p_laplace_avx512(const PointSpan &t, const PointSpan &s, const ResultSpan &r, std::size_t *n_zero)
 {
+  const std::size_t nt = t.n, ns = s.n;
+  const double *__restrict tx = t.x, *__restrict ty = t.y, *__restrict tz = t.z;
+  const double *__restrict sx = s.x, *__restrict sy = s.y, *__restrict sz = s.z, *__restrict sq = s.q;
+  double *__restrict pot = r.pot, *__restrict gx = r.gx, *__restrict gy = r.gy, *__restrict gz = r.gz;
   const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0), c1 = _mm512_set1_pd(0.5),
                 c2 = _mm512_set1_pd(0.375), c3 = _mm512_set1_pd(0.3125);
   std::size_t zeros = 0;
@@ -78,19 +91,22 @@ inline void p2p_laplace_avx512(std::size_t nt, const double *__restrict tx, cons
 }
 #endif
 
+// Targets t, sources s (with strengths), results added to r; n_zero (COUNT) counts the pairs
+// at r = 0.
 template <class K, bool POT, bool GRAD, bool COUNT>
-inline void p2p(const K &k, std::size_t nt, const double *__restrict tx, const double *__restrict ty,
-                const double *__restrict tz, std::size_t ns, const double *__restrict sx,
-                const double *__restrict sy, const double *__restrict sz, const double *__restrict sq,
-                double *__restrict pot, double *__restrict gx, double *__restrict gy,
-                double *__restrict gz, std::size_t *n_zero = nullptr)
+inline void p2p(const K &k, const PointSpan &t, const PointSpan &s, const ResultSpan &r,
+                std::size_t *n_zero = nullptr)
 {
 #if defined(__AVX512F__)
   if constexpr (std::is_same_v<K, LaplaceKernel>) {
-    p2p_laplace_avx512<POT, GRAD, COUNT>(nt, tx, ty, tz, ns, sx, sy, sz, sq, pot, gx, gy, gz, n_zero);
+    p2p_laplace_avx512<POT, GRAD, COUNT>(t, s, r, n_zero);
     return;
   }
 #endif
+  const std::size_t nt = t.n, ns = s.n;
+  const double *__restrict tx = t.x, *__restrict ty = t.y, *__restrict tz = t.z;
+  const double *__restrict sx = s.x, *__restrict sy = s.y, *__restrict sz = s.z, *__restrict sq = s.q;
+  double *__restrict pot = r.pot, *__restrict gx = r.gx, *__restrict gy = r.gy, *__restrict gz = r.gz;
   std::size_t zeros = 0;
   for (std::size_t i = 0; i < nt; ++i) {
     const double xi = tx[i], yi = ty[i], zi = tz[i];
@@ -130,15 +146,13 @@ inline void p2p(const K &k, std::size_t nt, const double *__restrict tx, const d
   }
 }
 
-// Runtime dispatch on whether the potential is wanted.
+// Runtime dispatch on whether the potential is wanted (the gradient always is).
 template <class K, bool COUNT>
-inline void p2p_pg(const K &k, bool want_pot, std::size_t nt, const double *tx, const double *ty,
-                   const double *tz, std::size_t ns, const double *sx, const double *sy, const double *sz,
-                   const double *sq, double *pot, double *gx, double *gy, double *gz,
+inline void p2p_pg(const K &k, bool want_pot, const PointSpan &t, const PointSpan &s, const ResultSpan &r,
                    std::size_t *n_zero = nullptr)
 {
-  if (want_pot) p2p<K, true, true, COUNT>(k, nt, tx, ty, tz, ns, sx, sy, sz, sq, pot, gx, gy, gz, n_zero);
-  else p2p<K, false, true, COUNT>(k, nt, tx, ty, tz, ns, sx, sy, sz, sq, pot, gx, gy, gz, n_zero);
+  if (want_pot) p2p<K, true, true, COUNT>(k, t, s, r, n_zero);
+  else p2p<K, false, true, COUNT>(k, t, s, r, n_zero);
 }
 
 }    // namespace kifmm

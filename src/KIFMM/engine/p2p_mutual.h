@@ -4,8 +4,8 @@
 // periodic near field when sources and targets are the same points (periodic_core.h): each
 // pair of adjacent leaves (with its image shift) is evaluated once instead of twice.
 //
-// Set A (na points, strengths aq) and set B (nb points) displaced by (shx, shy, shz): with
-// d = x_a - (x_b + sh), A gets q_b G, q_b F d and B gets q_a G, -q_a F d (F = G'(r)/r, the
+// Set A and set B (MutualSpan: points with strengths, and their accumulators), B displaced by
+// sh: with d = x_a - (x_b + sh), A gets q_b G, q_b F d and B gets q_a G, -q_a F d (F = G'(r)/r, the
 // convention of kernels.h). `self`: A and B are the same leaf (sh = 0), only pairs j > i.
 // Pairs with r2 == 0 are masked as in p2p.h; n_zero counts them as ordered pairs (both
 // directions; in `self` mode a point with itself counts once, as the one-sided loop does).
@@ -26,6 +26,12 @@
 #endif
 
 namespace kifmm {
+
+// One side of a mutual near-field call: points with strengths, and their accumulators.
+struct MutualSpan {
+  PointSpan pts;
+  ResultSpan acc;
+};
 
 #if defined(__AVX512F__)
 // One step of 8 B points against NI A targets (NI = 1 or 2): the B points and B accumulators
@@ -73,12 +79,14 @@ inline void mutual_step(const __m512d *xi, const __m512d *yi, const __m512d *zi,
 
 // Cross pairs of two different leaves (not `self`, see p2p_mutual).
 template <bool POT>
-inline void p2p_mutual_laplace_avx512(std::size_t na, const double *ax, const double *ay, const double *az,
-                                      const double *aq, double *ap, double *agx, double *agy, double *agz,
-                                      std::size_t nb, const double *bx, const double *by, const double *bz,
-                                      const double *bq, double *bp, double *bgx, double *bgy, double *bgz,
-                                      const double sh[3], std::size_t *n_zero)
+inline void p2p_mutual_laplace_avx512(const MutualSpan &A, const MutualSpan &B, const double sh[3],
+                                      std::size_t *n_zero)
 {
+  const std::size_t na = A.pts.n, nb = B.pts.n;
+  const double *ax = A.pts.x, *ay = A.pts.y, *az = A.pts.z, *aq = A.pts.q;
+  double *ap = A.acc.pot, *agx = A.acc.gx, *agy = A.acc.gy, *agz = A.acc.gz;
+  const double *bx = B.pts.x, *by = B.pts.y, *bz = B.pts.z, *bq = B.pts.q;
+  double *bp = B.acc.pot, *bgx = B.acc.gx, *bgy = B.acc.gy, *bgz = B.acc.gz;
   // aligned, padded copies of B (thread-local scratch, reused): x y z q | pot gx gy gz
   thread_local std::vector<double> buf;
   const std::size_t nbp = (nb + 7) & ~std::size_t(7);
@@ -137,24 +145,24 @@ inline void p2p_mutual_laplace_avx512(std::size_t na, const double *ax, const do
 #endif
 
 template <class K, bool POT>
-inline void p2p_mutual(const K &k, bool self, std::size_t na, const double *__restrict ax,
-                       const double *__restrict ay, const double *__restrict az, const double *__restrict aq,
-                       double *ap, double *agx, double *agy, double *agz, std::size_t nb,
-                       const double *__restrict bx, const double *__restrict by, const double *__restrict bz,
-                       const double *__restrict bq, double *bp, double *bgx, double *bgy, double *bgz,
-                       const double sh[3], std::size_t *n_zero)
+inline void p2p_mutual(const K &k, bool self, const MutualSpan &A, const MutualSpan &B, const double sh[3],
+                       std::size_t *n_zero)
 {
 #if defined(__AVX512F__)
   if constexpr (std::is_same_v<K, LaplaceKernel>) {
     if (self) {    // the leaf with itself: the one-sided loop over all pairs costs the same
-      p2p<K, POT, true, true>(k, na, ax, ay, az, nb, bx, by, bz, bq, ap, agx, agy, agz, n_zero);
+      p2p<K, POT, true, true>(k, A.pts, B.pts, A.acc, n_zero);
       return;
     }
-    p2p_mutual_laplace_avx512<POT>(na, ax, ay, az, aq, ap, agx, agy, agz, nb, bx, by, bz, bq, bp, bgx, bgy, bgz,
-                                   sh, n_zero);
+    p2p_mutual_laplace_avx512<POT>(A, B, sh, n_zero);
     return;
   }
 #endif
+  const std::size_t na = A.pts.n, nb = B.pts.n;
+  const double *__restrict ax = A.pts.x, *__restrict ay = A.pts.y, *__restrict az = A.pts.z, *__restrict aq = A.pts.q;
+  double *ap = A.acc.pot, *agx = A.acc.gx, *agy = A.acc.gy, *agz = A.acc.gz;
+  const double *__restrict bx = B.pts.x, *__restrict by = B.pts.y, *__restrict bz = B.pts.z, *__restrict bq = B.pts.q;
+  double *bp = B.acc.pot, *bgx = B.acc.gx, *bgy = B.acc.gy, *bgz = B.acc.gz;
   std::size_t zeros = 0;
   for (std::size_t i = 0; i < na; ++i) {
     const double xi = ax[i] - sh[0], yi = ay[i] - sh[1], zi = az[i] - sh[2], qi = aq[i];

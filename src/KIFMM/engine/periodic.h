@@ -32,21 +32,11 @@
 
 namespace kifmm {
 
-// Compressed rows of (cell, root shift) entries; shift has 3 values in {-1,0,1} per entry.
-struct ImageList {
-  std::vector<int> off, idx;
-  std::vector<signed char> shift;
-  int size(int i) const { return off.empty() ? 0 : off[i + 1] - off[i]; }
-  int begin(int i) const { return off[i]; }
-  int end(int i) const { return off[i + 1]; }
-  const signed char *shift_of(int e) const { return &shift[3 * (std::size_t) e]; }
-};
-
 // MutualPair (a pair of adjacent leaves evaluated once for both): interaction_lists.h
 
-struct PeriodicImageLists {
-  ImageList U, W, X;      // entries with a nonzero shift (the n = 0 ones are in InteractionLists)
-  std::vector<signed char> V_shift;    // shift of every entry of InteractionLists::V (tests)
+// Image entries of the lists (ImageLists: U, W, X with a nonzero shift, the shifts of V) and
+// the periodic evaluation's state that goes with them.
+struct PeriodicImageLists : ImageLists {
   // Mutual near field (same source and target points): every unordered pair of U-list
   // entries once, grouped by color (pairs of one color share no leaf: they run in parallel
   // and every target accumulates in the fixed color order, independent of the threads);
@@ -76,12 +66,10 @@ struct PeriodicImageLists {
 bool plan_mutual_near(const Octree &tree, InteractionLists &lists, PeriodicImageLists &images,
                       const std::vector<char> *only = nullptr);
 
-// Periodic lists of a tree whose root is the periodic cell (see above).
+// Periodic lists of a tree whose root is the periodic cell (see above): build_lists with the
+// PeriodicImages policy (interaction_lists.h); resets the mutual plan.
 void build_periodic_interaction_lists(const Octree &tree, InteractionLists &lists,
                                       PeriodicImageLists &images);
-
-// Root shift of the colleague at slot s ((dx+1)*9+(dy+1)*3+(dz+1)) of cell c (periodic tree).
-void colleague_shift(const Cell &c, int slot, int shift[3]);
 
 // Copies of the points wrapped into the cell [center - h, center + h)^3.
 void wrap_into_cell(std::size_t n, const double *xyz, const double center[3], double h,

@@ -1,10 +1,15 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
-// Periodic passes of FmmEvaluator<K> (included at the end of fmm_core.h; see periodic.h):
-//   periodic_wrap : points wrapped into the cell (the fixed root)
-//   periodic_far  : image X entries (P2L with shifted check surfaces) and the root's far-image
-//                   lattice operator, before the downward pass
-//   periodic_near : image U, W, X entries with shifted target coordinates, after the leaf pass;
-//                   Laplace: the constant of the non-harmonic part of the lattice operator
+// Steps of FmmEvaluator<K> for periodic boundaries (periodic_steps(); included at the end of
+// fmm_core.h; see periodic.h):
+//   periodic_wrap        : points wrapped into the cell (the fixed root)
+//   periodic_lists       : the lists with the PeriodicImages policy (image entries in plists_)
+//   periodic_plan_mutual : mutual near field of the U pairs, images included
+//   periodic_m2l         : levels 1-2 with summed slot kernels (periodic_m2l_top), then the
+//                          shared M2L of the levels below
+//   periodic_far         : image X entries (P2L with shifted check surfaces) and the root's
+//                          far-image lattice operator, before the downward pass
+//   periodic_near        : image U, W, X entries with shifted target coordinates, after the leaf
+//                          pass; Laplace: the non-harmonic part of the lattice operator
 #pragma once
 
 #include "fmm_core.h"
@@ -41,16 +46,49 @@ void FmmEvaluator<K>::periodic_wrap(std::size_t ns, const double *&sxyz, std::si
   }
 }
 
-template <class K> void FmmEvaluator<K>::periodic_far(std::size_t own_sources)
+template <class K> typename FmmEvaluator<K>::BoundarySteps FmmEvaluator<K>::periodic_steps()
+{
+  return {0, &FmmEvaluator::periodic_wrap, &FmmEvaluator::periodic_lists, &FmmEvaluator::periodic_plan_mutual,
+          &FmmEvaluator::periodic_m2l, &FmmEvaluator::periodic_far, &FmmEvaluator::periodic_near};
+}
+
+// Sources and targets are the same points (same order, same coordinates): the near field (U
+// lists, images included) is evaluated pair by pair for both leaves (periodic_near). Otherwise,
+// distributed: the pairs of the leaves in own_only, the other U entries one-sided.
+template <class K> void FmmEvaluator<K>::periodic_plan_mutual(const std::vector<char> *own_only)
+{
+  mutual_.clear();
+  if (same_sorted_points()) plan_mutual_near(tree_, lists_, plists_);
+  if (own_only && !plists_.mutual) plan_mutual_near(tree_, lists_, plists_, own_only);
+}
+
+template <class K> void FmmEvaluator<K>::periodic_m2l()
+{
+  for (int l = 1; l <= std::min(2, tree_.depth); ++l) periodic_m2l_top(l);
+  m2l_levels(3);
+}
+
+template <class K> void FmmEvaluator<K>::periodic_far(std::size_t own_sources, Communicator *comm)
+{
+  periodic_image_p2l();
+  periodic_root_operator();
+  // Laplace: the lattice operator's quadratic part (2pi/3V) sum_j q_j |x - y_j|^2, from the
+  // moments of the sources about the cell center (applied at the targets in periodic_near)
+  const double h0 = tree_.root.half_width;
+  periodic_background_moments(lattice_->quad / (h0 * h0 * h0), tree_.root.center, own_sources);
+  if (comm) {    // distributed: this rank's own sources' moments, summed over ranks
+    const double tm = omp_get_wtime();
+    comm->allreduce_sum(periodic_moments_, 5);
+    stats_.t_comm += omp_get_wtime() - tm;
+  }
+}
+
+// X entries with an image shift: P2L onto the target's check surface moved by -shift * L
+template <class K> void FmmEvaluator<K>::periodic_image_p2l()
 {
   const auto &cells = tree_.cells;
   const double L = 2.0 * tree_.root.half_width;
   const int n = (int) cells.size();
-  // sources and targets are the same points (same order, same coordinates): the near field
-  // (U lists, images included) is evaluated pair by pair for both leaves (periodic_near)
-  if (sx_.size() == tx_.size() && tree_.src_order == tree_.trg_order && sx_ == tx_ && sy_ == ty_ && sz_ == tz_)
-    plan_mutual_near(tree_, lists_, plists_);
-  // X entries with an image shift: P2L onto the target's check surface moved by -shift * L
 #pragma omp parallel
   {
     SurfacePoints surf;
@@ -71,14 +109,16 @@ template <class K> void FmmEvaluator<K>::periodic_far(std::size_t own_sources)
           z[i] = surf.z[i] - s[2] * L;
         }
         const Cell &A = cells[plists_.X.idx[e]];
-        const std::size_t s0 = A.src_begin;
-        p2p<K, true, false, false>(k_, nsurf_, x.data(), y.data(), z.data(), A.n_src(), &sx_[s0], &sy_[s0], &sz_[s0],
-                                   &sq_[s0], chk, nullptr, nullptr, nullptr);
+        p2p<K, true, false, false>(k_, {(std::size_t) nsurf_, x.data(), y.data(), z.data()}, source_span(A), {chk});
       }
       has_local_[b] = 1;
     }
   }
-  // images beyond the first shell: one operator at the root (tabulated on the M2L lattice)
+}
+
+// images beyond the first shell: one operator at the root (tabulated on the M2L lattice)
+template <class K> void FmmEvaluator<K>::periodic_root_operator()
+{
   const double h0 = tree_.root.half_width;
   KernelSpec unit;    // Laplace, or Yukawa with kappa * h0 (unit root)
   if constexpr (std::is_same_v<K, YukawaKernel>) unit = KernelSpec{KernelType::Yukawa, k_.kappa * h0};
@@ -103,9 +143,6 @@ template <class K> void FmmEvaluator<K>::periodic_far(std::size_t own_sources)
     chk[i] += s * acc;
   }
   has_local_[0] = 1;
-  // Laplace: the lattice operator's quadratic part (2pi/3V) sum_j q_j |x - y_j|^2, from the
-  // moments of the sources about the cell center (applied at the targets in periodic_near)
-  periodic_background_moments(lattice_->quad / (h0 * h0 * h0), tree_.root.center, own_sources);
 }
 
 // Laplace: the quadratic part quad sum_j q_j |x - y_j|^2 of the lattice sum (periodic.h), from
@@ -143,32 +180,27 @@ template <class K> void FmmEvaluator<K>::add_periodic_background(bool want_pot, 
   }
 }
 
-// M2L of the periodic levels 1 and 2, whose parents (1 and 2 per side) are their own
-// colleagues' images: the colleague slots of a parent that hold the same source parent (with
-// different shifts) are summed into one kernel per (source child, target child) in frequency
-// space, so every (target parent, source parent) pair is multiplied once instead of once per
-// slot (level 2: 56 parent pairs instead of 208; level 1: 1 instead of 26). Sources, targets,
-// transforms and the order of accumulation per target are otherwise those of m2l().
-template <class K> void FmmEvaluator<K>::periodic_m2l_top(int l)
+namespace periodic_top {
+
+// The M2L pairs of one of the levels 1, 2 grouped by slot set: for every target parent, the
+// set of colleague slots (bit mask) at which it sees one source parent; pairs[g]: the (target
+// parent, source parent) pairs (indices from the level's first parent) of mask[g].
+struct SlotGroups {
+  std::vector<uint32_t> mask;
+  std::vector<std::vector<std::pair<int, int>>> pairs;
+};
+
+inline SlotGroups slot_groups(const Octree &tree, const InteractionLists &lists, int l,
+                              const std::vector<const double *> &xtab, const std::vector<double *> &ytab)
 {
-  const auto &cells = tree_.cells;
-  const int nf = fft_->nfreq();
-  std::vector<double> &xhat = xhat_, &yhat = yhat_;
-  const int p0 = tree_.level_begin[l - 1], p1 = tree_.level_begin[l];
-  std::vector<int> sources, targets;
-  std::vector<const double *> xtab;
-  std::vector<double *> ytab;
-  if (!m2l_level_layout(l, sources, targets, xtab, ytab)) return;
-  const int nsrc = (int) sources.size(), ntrg = (int) targets.size();
-  const std::size_t xstride = (std::size_t) nsrc * 32, ystride = (std::size_t) ntrg * 32;
-  // groups: the set of slots (bit mask) at which a target parent sees one source parent
-  std::vector<uint32_t> group_mask;
-  std::vector<std::vector<std::pair<int, int>>> group_pairs;
+  const auto &cells = tree.cells;
+  const int p0 = tree.level_begin[l - 1], p1 = tree.level_begin[l];
+  SlotGroups gr;
   for (int pc = p0; pc < p1; ++pc) {
     bool has_trg = false;
     for (int o = 0; o < 8; ++o) has_trg = has_trg || ytab[(std::size_t) (pc - p0) * 8 + o];
     if (!has_trg) continue;
-    const auto &col = lists_.colleagues[pc];
+    const auto &col = lists.colleagues[pc];
     std::vector<std::pair<int, uint32_t>> by_src;    // source parent -> slots
     for (int sl = 0; sl < 27; ++sl) {
       const int cc = col[sl];
@@ -182,15 +214,20 @@ template <class K> void FmmEvaluator<K>::periodic_m2l_top(int l)
     }
     for (const auto &[cc, mask] : by_src) {
       std::size_t g = 0;
-      while (g < group_mask.size() && group_mask[g] != mask) ++g;
-      if (g == group_mask.size()) {
-        group_mask.push_back(mask);
-        group_pairs.emplace_back();
+      while (g < gr.mask.size() && gr.mask[g] != mask) ++g;
+      if (g == gr.mask.size()) {
+        gr.mask.push_back(mask);
+        gr.pairs.emplace_back();
       }
-      group_pairs[g].emplace_back(pc - p0, cc - p0);
+      gr.pairs[g].emplace_back(pc - p0, cc - p0);
     }
   }
-  // kernel indices of every (group, source child, target child): the slots of the group
+  return gr;
+}
+
+// M2L kernel indices of every (group, source child, target child): the slots of the group
+inline std::vector<std::vector<int>> kernel_ids(const std::vector<uint32_t> &group_mask)
+{
   const int ngroup = (int) group_mask.size();
   std::vector<std::vector<int>> kid((std::size_t) ngroup * 64);
   for (int g = 0; g < ngroup; ++g)
@@ -205,53 +242,92 @@ template <class K> void FmmEvaluator<K>::periodic_m2l_top(int l)
           if (id >= 0) kid[(std::size_t) g * 64 + sc * 8 + tc].push_back(id);
         }
     }
+  return kid;
+}
+
+// summed kernel chunk of frequency block blk over the kernels ids into k[32]
+inline void sum_kernels(const double *kern, const std::vector<int> &ids, int blk, double *k)
+{
+  const double *kb = kern + (std::size_t) blk * kM2LKernels * 32;
+  if (ids.empty()) {
+    std::fill(k, k + 32, 0.0);
+    return;
+  }
+  const double *first = kb + (std::size_t) ids[0] * 32;
+  for (int f = 0; f < 32; ++f) k[f] = first[f];
+  for (std::size_t q = 1; q < ids.size(); ++q) {
+    const double *src = kb + (std::size_t) ids[q] * 32;
+#pragma omp simd
+    for (int f = 0; f < 32; ++f) k[f] += src[f];
+  }
+}
+
+// Hadamard products of one frequency block (offsets xo, yo in the spectra) for the pairs of one
+// group with the group's summed kernels kg ([source child * 8 + target child][32]); nonzero:
+// per (source child, target child) of the group, whether any kernel is summed there.
+inline void multiply_group(const double *kg, const std::vector<std::pair<int, int>> &pairs, const char *nonzero,
+                           const double *const *xtab, double *const *ytab, std::size_t xo, std::size_t yo)
+{
+  for (const auto &pr : pairs) {
+    double *const *y = ytab + 8 * (std::size_t) pr.first;
+    const double *const *x = xtab + 8 * (std::size_t) pr.second;
+    for (int tc = 0; tc < 8; ++tc) {
+      if (!y[tc]) continue;
+      double *yr = y[tc] + yo, *yi = yr + 16;
+      alignas(64) double ar[16], ai[16];    // accumulated over the source children
+      for (int f = 0; f < 16; ++f) {
+        ar[f] = yr[f];
+        ai[f] = yi[f];
+      }
+      for (int sc = 0; sc < 8; ++sc) {
+        if (!x[sc] || !nonzero[sc * 8 + tc]) continue;
+        const double *kr = kg + (std::size_t) (sc * 8 + tc) * 32, *ki = kr + 16;
+        const double *xr = x[sc] + xo, *xi = xr + 16;
+#pragma omp simd aligned(ar, ai : 64)
+        for (int f = 0; f < 16; ++f) {
+          ar[f] += kr[f] * xr[f] - ki[f] * xi[f];
+          ai[f] += kr[f] * xi[f] + ki[f] * xr[f];
+        }
+      }
+      for (int f = 0; f < 16; ++f) {
+        yr[f] = ar[f];
+        yi[f] = ai[f];
+      }
+    }
+  }
+}
+
+}    // namespace periodic_top
+
+// M2L of the periodic levels 1 and 2, whose parents (1 and 2 per side) are their own
+// colleagues' images: the colleague slots of a parent that hold the same source parent (with
+// different shifts) are summed into one kernel per (source child, target child) in frequency
+// space, so every (target parent, source parent) pair is multiplied once instead of once per
+// slot (level 2: 56 parent pairs instead of 208; level 1: 1 instead of 26). Sources, targets,
+// transforms and the order of accumulation per target are otherwise those of m2l_levels().
+template <class K> void FmmEvaluator<K>::periodic_m2l_top(int l)
+{
+  const int nf = fft_->nfreq();
+  std::vector<int> sources, targets;
+  std::vector<const double *> xtab;
+  std::vector<double *> ytab;
+  if (!m2l_level_layout(l, sources, targets, xtab, ytab)) return;
+  const int nsrc = (int) sources.size(), ntrg = (int) targets.size();
+  const std::size_t xstride = (std::size_t) nsrc * 32, ystride = (std::size_t) ntrg * 32;
+  const periodic_top::SlotGroups groups = periodic_top::slot_groups(tree_, lists_, l, xtab, ytab);
+  const std::vector<std::vector<int>> kid = periodic_top::kernel_ids(groups.mask);
+  const int ngroup = (int) groups.mask.size();
   std::vector<char> nonzero(kid.size());
   for (std::size_t q = 0; q < kid.size(); ++q) nonzero[q] = !kid[q].empty();
 #pragma omp parallel if (nsrc > 4)
   {
     M2LTransform::Workspace ws(*fft_);
 #pragma omp for schedule(dynamic, 8)
-    for (int i = 0; i < nsrc; ++i) fft_->forward(up(sources[i]), &xhat[(std::size_t) i * 32], xstride, ws);
+    for (int i = 0; i < nsrc; ++i) fft_->forward(up(sources[i]), &xhat_[(std::size_t) i * 32], xstride, ws);
   }
   const double *kern = ops_[l]->m2l_hat.data();
   const int nblocks = nf / 16;
-  // summed kernel chunk (block, group, source child, target child) into k[32]
-  auto sum_kernels = [&](int blk, int g, int st, double *k) {
-    const std::vector<int> &ids = kid[(std::size_t) g * 64 + st];
-    const double *kb = kern + (std::size_t) blk * kM2LKernels * 32;
-    if (ids.empty()) {
-      std::fill(k, k + 32, 0.0);
-      return;
-    }
-    const double *first = kb + (std::size_t) ids[0] * 32;
-    for (int f = 0; f < 32; ++f) k[f] = first[f];
-    for (std::size_t q = 1; q < ids.size(); ++q) {
-      const double *src = kb + (std::size_t) ids[q] * 32;
-#pragma omp simd
-      for (int f = 0; f < 32; ++f) k[f] += src[f];
-    }
-  };
-  // cached sums (orders <= 10: at most 8 masks x 64 x nfreq complex, 36 MB at p = 10)
-  std::vector<const double *> cached(ngroup, nullptr);
-  if (p_ <= 10) {
-    auto &cache = plists_.top_kernels;
-    if (cache.size() > 16) cache.clear();
-    for (int g = 0; g < ngroup; ++g) {
-      std::size_t e = 0;
-      while (e < cache.size() && !(cache[e].ops.get() == ops_[l].get() && cache[e].mask == group_mask[g])) ++e;
-      if (e == cache.size()) {
-        PeriodicImageLists::TopKernel t;
-        t.ops = ops_[l];
-        t.mask = group_mask[g];
-        t.hat.resize((std::size_t) nblocks * 64 * 32);
-#pragma omp parallel for schedule(static)
-        for (int blk = 0; blk < nblocks; ++blk)
-          for (int st = 0; st < 64; ++st) sum_kernels(blk, g, st, &t.hat[((std::size_t) blk * 64 + st) * 32]);
-        cache.push_back(std::move(t));
-      }
-      cached[g] = cache[e].hat.data();
-    }
-  }
+  const std::vector<const double *> cached = periodic_top_kernels(l, groups.mask, kid, nblocks);
 #pragma omp parallel
   {
     std::vector<double> kc(64 * 32);
@@ -263,36 +339,12 @@ template <class K> void FmmEvaluator<K>::periodic_m2l_top(int l)
         if (cached[g]) {
           kg = cached[g] + (std::size_t) blk * 64 * 32;
         } else {
-          for (int st = 0; st < 64; ++st) sum_kernels(blk, g, st, &kc[(std::size_t) st * 32]);
+          for (int st = 0; st < 64; ++st)
+            periodic_top::sum_kernels(kern, kid[(std::size_t) g * 64 + st], blk, &kc[(std::size_t) st * 32]);
           kg = kc.data();
         }
-        for (const auto &pr : group_pairs[g]) {
-          double *const *y = ytab.data() + 8 * (std::size_t) pr.first;
-          const double *const *x = xtab.data() + 8 * (std::size_t) pr.second;
-          for (int tc = 0; tc < 8; ++tc) {
-            if (!y[tc]) continue;
-            double *yr = y[tc] + yo, *yi = yr + 16;
-            alignas(64) double ar[16], ai[16];    // accumulated over the source children
-            for (int f = 0; f < 16; ++f) {
-              ar[f] = yr[f];
-              ai[f] = yi[f];
-            }
-            for (int sc = 0; sc < 8; ++sc) {
-              if (!x[sc] || !nonzero[(std::size_t) g * 64 + sc * 8 + tc]) continue;
-              const double *kr = kg + (std::size_t) (sc * 8 + tc) * 32, *ki = kr + 16;
-              const double *xr = x[sc] + xo, *xi = xr + 16;
-#pragma omp simd aligned(ar, ai : 64)
-              for (int f = 0; f < 16; ++f) {
-                ar[f] += kr[f] * xr[f] - ki[f] * xi[f];
-                ai[f] += kr[f] * xi[f] + ki[f] * xr[f];
-              }
-            }
-            for (int f = 0; f < 16; ++f) {
-              yr[f] = ar[f];
-              yi[f] = ai[f];
-            }
-          }
-        }
+        periodic_top::multiply_group(kg, groups.pairs[g], &nonzero[(std::size_t) g * 64], xtab.data(), ytab.data(),
+                                     xo, yo);
       }
     }
   }
@@ -302,10 +354,43 @@ template <class K> void FmmEvaluator<K>::periodic_m2l_top(int l)
     M2LTransform::Workspace ws(*fft_);
 #pragma omp for schedule(dynamic, 8)
     for (int i = 0; i < ntrg; ++i) {
-      fft_->inverse_add(&yhat[(std::size_t) i * 32], ystride, dcheck(targets[i]), s, ws);
+      fft_->inverse_add(&yhat_[(std::size_t) i * 32], ystride, dcheck(targets[i]), s, ws);
       has_local_[targets[i]] = 1;
     }
   }
+}
+
+// Summed slot kernels of the groups of level l, kept across evaluations in plists_.top_kernels
+// (orders <= 10: at most 8 masks x 64 x nfreq complex, 36 MB at p = 10); null where not kept
+// (higher orders: summed per block during the products).
+template <class K>
+std::vector<const double *> FmmEvaluator<K>::periodic_top_kernels(int l, const std::vector<uint32_t> &group_mask,
+                                                                  const std::vector<std::vector<int>> &kid,
+                                                                  int nblocks)
+{
+  const int ngroup = (int) group_mask.size();
+  std::vector<const double *> cached(ngroup, nullptr);
+  if (p_ > 10) return cached;
+  const double *kern = ops_[l]->m2l_hat.data();
+  auto &cache = plists_.top_kernels;
+  if (cache.size() > 16) cache.clear();
+  for (int g = 0; g < ngroup; ++g) {
+    std::size_t e = 0;
+    while (e < cache.size() && !(cache[e].ops.get() == ops_[l].get() && cache[e].mask == group_mask[g])) ++e;
+    if (e == cache.size()) {
+      PeriodicImageLists::TopKernel t;
+      t.ops = ops_[l];
+      t.mask = group_mask[g];
+      t.hat.resize((std::size_t) nblocks * 64 * 32);
+#pragma omp parallel for schedule(static)
+      for (int blk = 0; blk < nblocks; ++blk)
+        for (int st = 0; st < 64; ++st)
+          periodic_top::sum_kernels(kern, kid[(std::size_t) g * 64 + st], blk, &t.hat[((std::size_t) blk * 64 + st) * 32]);
+      cache.push_back(std::move(t));
+    }
+    cached[g] = cache[e].hat.data();
+  }
+  return cached;
 }
 
 template <class K> void FmmEvaluator<K>::periodic_near(bool want_pot)
@@ -339,12 +424,9 @@ template <class K> void FmmEvaluator<K>::periodic_near(bool want_pot)
           z[i] = tz_[t0 + i] - s[2] * L;
         }
       };
-      double *tp = &tp_[t0], *gx = &tgx_[t0], *gy = &tgy_[t0], *gz = &tgz_[t0];
-      auto direct = [&](const Cell &A) {
-        const std::size_t s0 = A.src_begin;
-        p2p_pg<K, false>(k_, want_pot, nt, x.data(), y.data(), z.data(), A.n_src(), &sx_[s0], &sy_[s0], &sz_[s0],
-                         &sq_[s0], tp, gx, gy, gz);
-      };
+      const PointSpan trg{nt, x.data(), y.data(), z.data(), nullptr};
+      const ResultSpan res = result_span(B);
+      auto direct = [&](const Cell &A) { p2p_pg<K, false>(k_, want_pot, trg, source_span(A), res); };
       for (int e = plists_.U.begin(b); e < plists_.U.end(b); ++e) {
         shifted(plists_.U.shift_of(e));
         direct(cells[plists_.U.idx[e]]);
@@ -356,8 +438,7 @@ template <class K> void FmmEvaluator<K>::periodic_near(bool want_pot)
           direct(cells[a]);
         } else {
           cell_surface(a, inner_, surf);
-          p2p_pg<K, false>(k_, want_pot, nt, x.data(), y.data(), z.data(), nsurf_, surf.x.data(), surf.y.data(),
-                           surf.z.data(), up(a), tp, gx, gy, gz);
+          p2p_pg<K, false>(k_, want_pot, trg, surface_span(surf, up(a)), res);
         }
       }
       if (x_direct(b))

@@ -161,261 +161,312 @@ void FmmEvaluator<K>::grid_bin(std::size_t ns, const double *sxyz, const double 
   sorted_copies(ns, sxyz, sq, nt, txyz);
 }
 
+template <class K> typename FmmEvaluator<K>::GridGeometry FmmEvaluator<K>::grid_geometry() const
+{
+  GridGeometry g;
+  g.k = opt_.periodic_grid;
+  g.kc = g.k * g.k * g.k;
+  g.H = opt_.root_half_width;
+  g.w = 2.0 * g.H / g.k;
+  g.h = 0.5 * g.w;
+  g.L = 2.0 * g.H;
+  return g;
+}
+
+template <class K> void FmmEvaluator<K>::grid_center(const GridGeometry &g, int b, double ctr[3]) const
+{
+  const int a[3] = {b / (g.k * g.k), (b / g.k) % g.k, b % g.k};
+  for (int d = 0; d < 3; ++d) ctr[d] = opt_.root_center[d] - g.H + (a[d] + 0.5) * g.w;
+}
+
+template <class K> void FmmEvaluator<K>::grid_reduce(Communicator *comm, double *v, std::size_t m)
+{
+  if (!comm) return;
+  const double tc = omp_get_wtime();
+  comm->allreduce_sum(v, m);
+  stats_.t_comm += omp_get_wtime() - tc;
+}
+
 // The passes after binning (comm: null on one process; distributed: the upward densities,
 // cell occupancies, background moments and wrap marginals are summed over ranks).
 template <class K>
 void FmmEvaluator<K>::grid_passes(Communicator *comm, std::size_t own_sources, bool want_pot, bool same_points)
 {
   if constexpr (std::is_same_v<K, LaplaceKernel> || std::is_same_v<K, YukawaKernel>) {
-    const int k = opt_.periodic_grid;
-    const int kc = k * k * k;
-    const double H = opt_.root_half_width, w = 2.0 * H / k, h = 0.5 * w;
-    const double *c = opt_.root_center;
+    const GridGeometry g = grid_geometry();
     const std::size_t nt = tx_.size();
-    auto reduce = [&](double *v, std::size_t m) {
-      if (!comm) return;
-      const double tc = omp_get_wtime();
-      comm->allreduce_sum(v, m);
-      stats_.t_comm += omp_get_wtime() - tc;
-    };
-    const std::vector<int> &sb = grid_src_begin_, &tb = grid_trg_begin_, &own_end = grid_own_end_;
-    auto center = [&](int b, double ctr[3]) {
-      const int a[3] = {b / (k * k), (b / k) % k, b % k};
-      for (int d = 0; d < 3; ++d) ctr[d] = c[d] - H + (a[d] + 0.5) * w;
-    };
     stats_.depth = 0;
-    stats_.n_cells = stats_.n_leaves = kc;
-    // ---- operators of the cell size, and the grid kernels
-    double t_setup = 0, s = 1.0;
-    ops_.assign(1, get_operator_set(make_unit_kernel(k_, h, s), p_, opt_.cache_dir, &t_setup));
-    scale_.assign(1, s);
-    if (!fft_ || fft_->p() != p_) fft_ = std::make_unique<M2LTransform>(p_);
-    const double tg = omp_get_wtime();
-    KernelSpec unit;    // Laplace, or Yukawa with kappa * H (unit cell)
-    if constexpr (std::is_same_v<K, YukawaKernel>) unit = KernelSpec{KernelType::Yukawa, k_.kappa * H};
-    grid_kernel_ = periodic_grid_kernel(unit, k, p_);
-    stats_.t_precompute = t_setup + (omp_get_wtime() - tg);
-    stats_.operator_bytes = ops_[0]->bytes() + grid_kernel_->bytes();
-    const OperatorSet &op = *ops_[0];
-    const GridKernel &gk = *grid_kernel_;
-    const int nf = gk.nfreq;
-    up_equiv_.assign((std::size_t) kc * nsurf_, 0.0);
-    dn_check_.assign((std::size_t) kc * nsurf_, 0.0);
-    dn_equiv_.assign((std::size_t) kc * nsurf_, 0.0);
+    stats_.n_cells = stats_.n_leaves = g.kc;
+    grid_operators(g);
+    up_equiv_.assign((std::size_t) g.kc * nsurf_, 0.0);
+    dn_check_.assign((std::size_t) g.kc * nsurf_, 0.0);
+    dn_equiv_.assign((std::size_t) g.kc * nsurf_, 0.0);
     tp_.assign(nt, 0.0);
     tgx_.assign(nt, 0.0);
     tgy_.assign(nt, 0.0);
     tgz_.assign(nt, 0.0);
     const double t2 = omp_get_wtime();
-    // ---- P2M (cells with sources), batched
-    constexpr int kBatch = 64;
-    const int nchunks = (kc + kBatch - 1) / kBatch;
-#pragma omp parallel
-    {
-      SurfacePoints surf;
-      std::vector<double> chk, eq;
-#pragma omp for schedule(dynamic, 1)
-      for (int ch = 0; ch < nchunks; ++ch) {
-        const int b0 = ch * kBatch, m = std::min(kc, b0 + kBatch) - b0;
-        chk.assign((std::size_t) nsurf_ * m, 0.0);
-        for (int j = 0; j < m; ++j) {
-          const int b = b0 + j;
-          if (own_end[b] == sb[b]) continue;
-          double ctr[3];
-          center(b, ctr);
-          box_surface(outer_, ctr, h, surf);
-          p2p<K, true, false, false>(k_, nsurf_, surf.x.data(), surf.y.data(), surf.z.data(), own_end[b] - sb[b],
-                                     &sx_[sb[b]], &sy_[sb[b]], &sz_[sb[b]], &sq_[sb[b]], &chk[(std::size_t) j * nsurf_],
-                                     nullptr, nullptr, nullptr);
-        }
-        eq.resize(chk.size());
-        apply_pinv_batch(op.uc2e_a, op.uc2e_b, nsurf_, op.rank, chk.data(), m, eq.data(), 1.0 / s);
-        std::copy(eq.begin(), eq.end(), up(b0));
-      }
-    }
+    grid_p2m(g);
     // cells with sources on any rank; the densities of the whole cells
-    std::vector<double> occupied(kc);
-    for (int b = 0; b < kc; ++b) occupied[b] = own_end[b] - sb[b];
-    reduce(occupied.data(), kc);
-    reduce(up_equiv_.data(), up_equiv_.size());
-    double t3 = omp_get_wtime();
+    std::vector<double> occupied(g.kc);
+    for (int b = 0; b < g.kc; ++b) occupied[b] = grid_own_end_[b] - grid_src_begin_[b];
+    grid_reduce(comm, occupied.data(), g.kc);
+    grid_reduce(comm, up_equiv_.data(), up_equiv_.size());
+    const double t3 = omp_get_wtime();
     stats_.t_upward = t3 - t2;
-    // ---- M2L: surface spectra of all cells -> convolution over the cells -> check potentials
-    std::complex<double> *z = grid_spectra_.get((std::size_t) nf * kc);
-    const int nblk = nf / 16;
-#pragma omp parallel
-    {
-      M2LTransform::Workspace ws(*fft_);
-      std::vector<double> chunk((std::size_t) nblk * 32);
-#pragma omp for schedule(static)
-      for (int b = 0; b < kc; ++b) {
-        std::complex<double> *zb = z + (std::size_t) b * nf;
-        if (occupied[b] == 0) {
-          std::fill(zb, zb + nf, std::complex<double>(0.0));
-          continue;
-        }
-        fft_->forward(up(b), chunk.data(), 32, ws);
-        for (int f = 0; f < nf; ++f)
-          zb[f] = std::complex<double>(chunk[(f / 16) * 32 + f % 16], chunk[(f / 16) * 32 + 16 + f % 16]);
-      }
-#pragma omp for schedule(dynamic, 1)
-      for (int blk = 0; blk < nblk; ++blk) grid_convolve(gk, z, 16 * blk, 16 * blk + 16);
-#pragma omp for schedule(static)
-      for (int b = 0; b < kc; ++b) {
-        if (tb[b + 1] == tb[b]) continue;
-        for (int f = 0; f < nf; ++f) {
-          const std::complex<double> v = z[(std::size_t) b * nf + f];
-          chunk[(f / 16) * 32 + f % 16] = v.real();
-          chunk[(f / 16) * 32 + 16 + f % 16] = v.imag();
-        }
-        fft_->inverse_add(chunk.data(), 32, dcheck(b), s, ws);
-      }
-    }
-    double t4 = omp_get_wtime();
+    grid_m2l(g, occupied);
+    const double t4 = omp_get_wtime();
     stats_.t_m2l = t4 - t3;
-    // ---- check -> downward equivalent (batched), L2P
-#pragma omp parallel
-    {
-      SurfacePoints surf;
-      std::vector<double> eq;
-#pragma omp for schedule(dynamic, 1)
-      for (int ch = 0; ch < nchunks; ++ch) {
-        const int b0 = ch * kBatch, m = std::min(kc, b0 + kBatch) - b0;
-        eq.resize((std::size_t) nsurf_ * m);
-        apply_pinv_batch(op.dc2e_a, op.dc2e_b, nsurf_, op.rank, dcheck(b0), m, eq.data(), 1.0 / s);
-        std::copy(eq.begin(), eq.end(), dequiv(b0));
-        for (int b = b0; b < b0 + m; ++b) {
-          if (tb[b + 1] == tb[b]) continue;
-          double ctr[3];
-          center(b, ctr);
-          box_surface(outer_, ctr, h, surf);
-          const std::size_t t = tb[b];
-          p2p_pg<K, false>(k_, want_pot, tb[b + 1] - tb[b], &tx_[t], &ty_[t], &tz_[t], nsurf_, surf.x.data(),
-                           surf.y.data(), surf.z.data(), dequiv(b), &tp_[t], &tgx_[t], &tgy_[t], &tgz_[t]);
-        }
-      }
-    }
-    double t5 = omp_get_wtime();
+    grid_l2p(g, want_pot);
+    const double t5 = omp_get_wtime();
     stats_.t_downward = t5 - t4;
-    // ---- near field: each cell with itself and its 26 neighbours (images: shift in {-1,0,1}^3)
-    const double L = 2.0 * H;
-    std::size_t zeros = 0;
-    if (same_points) {    // pair by pair for both cells (13 of the 26 offsets)
-      std::vector<int> self;
-      std::vector<MutualPair> pairs;
-      for (int b = 0; b < kc; ++b) {
-        if (sb[b + 1] == sb[b]) continue;
-        self.push_back(b);
-        for (int o = 14; o < 27; ++o) {
-          MutualPair pr;
-          pr.a = b;
-          pr.b = grid_neighbour(b, o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, pr.shift);
-          if (sb[pr.b + 1] > sb[pr.b]) pairs.push_back(pr);
-        }
-      }
-      stats_.mutual_pairs = pairs.size();
-      zeros = run_mutual_tasks(kc, self, pairs, [&](int a, int b, const signed char *sh, bool self_pair) {
-        const double d[3] = {sh[0] * L, sh[1] * L, sh[2] * L};
-        const std::size_t i0 = sb[a], j0 = sb[b], na = sb[a + 1] - sb[a], nb = sb[b + 1] - sb[b];
-        std::size_t z0 = 0;
-        if (want_pot)
-          p2p_mutual<K, true>(k_, self_pair, na, &sx_[i0], &sy_[i0], &sz_[i0], &sq_[i0], &tp_[i0], &tgx_[i0],
-                              &tgy_[i0], &tgz_[i0], nb, &sx_[j0], &sy_[j0], &sz_[j0], &sq_[j0], &tp_[j0], &tgx_[j0],
-                              &tgy_[j0], &tgz_[j0], d, &z0);
-        else
-          p2p_mutual<K, false>(k_, self_pair, na, &sx_[i0], &sy_[i0], &sz_[i0], &sq_[i0], &tp_[i0], &tgx_[i0],
-                               &tgy_[i0], &tgz_[i0], nb, &sx_[j0], &sy_[j0], &sz_[j0], &sq_[j0], &tp_[j0], &tgx_[j0],
-                               &tgy_[j0], &tgz_[j0], d, &z0);
-        return z0;
-      });
-    } else {    // one-sided: targets moved by -shift L see the sources of the image at +shift L
-      std::vector<std::size_t> zc(kc, 0);
-#pragma omp parallel
-      {
-        std::vector<double> x, y, zz;
-#pragma omp for schedule(dynamic, 1)
-        for (int b = 0; b < kc; ++b) {
-          const std::size_t t = tb[b], n = tb[b + 1] - tb[b];
-          if (n == 0) continue;
-          x.resize(n);
-          y.resize(n);
-          zz.resize(n);
-          for (int o = 0; o < 27; ++o) {
-            signed char sh[3];
-            const int a = grid_neighbour(b, o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, sh);
-            for (std::size_t i = 0; i < n; ++i) {
-              x[i] = tx_[t + i] - sh[0] * L;
-              y[i] = ty_[t + i] - sh[1] * L;
-              zz[i] = tz_[t + i] - sh[2] * L;
-            }
-            p2p_pg<K, true>(k_, want_pot, n, x.data(), y.data(), zz.data(), sb[a + 1] - sb[a], &sx_[sb[a]],
-                            &sy_[sb[a]], &sz_[sb[a]], &sq_[sb[a]], &tp_[t], &tgx_[t], &tgy_[t], &tgz_[t], &zc[b]);
-          }
-        }
-      }
-      for (std::size_t v : zc) zeros += v;
-    }
-    stats_.coincident_pairs = zeros;
+    stats_.coincident_pairs = same_points ? grid_near_mutual(g, want_pot) : grid_near_one_sided(g, want_pot);
     stats_.t_p2p = omp_get_wtime() - t5;
     // ---- Laplace background (non-harmonic part of G_per), exact from the moments
-    const double quad = gk.quad / (h * h * h);
-    periodic_background_moments(quad, c, own_sources);
-    reduce(periodic_moments_, 5);
-    add_periodic_background(want_pot, c);
-    if (quad != 0.0) {    // Laplace (Yukawa has no background)
-      // The kernels subtract quad |r|^2 at the separation r of the class representative (the
-      // image of the source cell nearest to the target cell, r = x - y + L m with m in
-      // {-1,0,1}^3 per cell pair), the moments above add it back at x - y: add the difference
-      // quad (2 L m.(x - y) + L^2 |m|^2) = quad (2 L (alpha.x - beta) + L^2 gamma) with, per
-      // target cell, alpha_d = sum_s m_d Q_s, beta = sum_s m.P_s, gamma = sum_s |m|^2 Q_s (Q_s,
-      // P_s: charge and dipole of source cell s). m_d depends on the cells' indices along axis d
-      // only: the sums are over the per-axis marginals of Q and P (O(k^2) per axis).
-      std::vector<double> Qa(3 * (std::size_t) k, 0.0), Pa(3 * (std::size_t) k, 0.0);
-      for (int b = 0; b < kc; ++b) {
-        const int sa[3] = {b / (k * k), (b / k) % k, b % k};
-        for (int j = sb[b]; j < own_end[b]; ++j) {
-          const double y[3] = {sx_[j] - c[0], sy_[j] - c[1], sz_[j] - c[2]};
-          for (int d = 0; d < 3; ++d) {
-            Qa[d * k + sa[d]] += sq_[j];
-            Pa[d * k + sa[d]] += sq_[j] * y[d];
-          }
-        }
-      }
-      reduce(Qa.data(), Qa.size());
-      reduce(Pa.data(), Pa.size());
-      auto wrap_of = [k](int t, int s) { return (grid_class_representative(t - s, k) - (t - s)) / k; };
-      std::vector<double> A(3 * (std::size_t) k, 0.0), B(3 * (std::size_t) k, 0.0), C(3 * (std::size_t) k, 0.0);
-      for (int d = 0; d < 3; ++d)
-        for (int t = 0; t < k; ++t)
-          for (int s2 = 0; s2 < k; ++s2) {
-            const int m = wrap_of(t, s2);
-            A[d * k + t] += m * Qa[d * k + s2];
-            B[d * k + t] += m * Pa[d * k + s2];
-            C[d * k + t] += m * m * Qa[d * k + s2];
-          }
-  #pragma omp parallel for schedule(static)
-      for (int t = 0; t < kc; ++t) {
-        const int ta[3] = {t / (k * k), (t / k) % k, t % k};
-        const double alpha[3] = {A[ta[0]], A[k + ta[1]], A[2 * k + ta[2]]};
-        const double beta = B[ta[0]] + B[k + ta[1]] + B[2 * k + ta[2]];
-        const double gamma = C[ta[0]] + C[k + ta[1]] + C[2 * k + ta[2]];
-        for (int i = tb[t]; i < tb[t + 1]; ++i) {
-          const double x[3] = {tx_[i] - c[0], ty_[i] - c[1], tz_[i] - c[2]};
-          if (want_pot)
-            tp_[i] += quad * (2 * L * (alpha[0] * x[0] + alpha[1] * x[1] + alpha[2] * x[2] - beta) + L * L * gamma);
-          tgx_[i] += 2 * quad * L * alpha[0];
-          tgy_[i] += 2 * quad * L * alpha[1];
-          tgz_[i] += 2 * quad * L * alpha[2];
-        }
-      }
-    }
-    stats_.tree_bytes = grid_spectra_.bytes() + sizeof(double) * (up_equiv_.size() + dn_check_.size() + dn_equiv_.size() + sx_.size() * 4 +
-                                          tx_.size() * 7);
+    const double quad = grid_kernel_->quad / (g.h * g.h * g.h);
+    periodic_background_moments(quad, opt_.root_center, own_sources);
+    grid_reduce(comm, periodic_moments_, 5);
+    add_periodic_background(want_pot, opt_.root_center);
+    if (quad != 0.0) grid_wrap_correction(g, comm, quad, want_pot);    // Laplace (Yukawa has no background)
+    stats_.tree_bytes = grid_spectra_.bytes() + sizeof(double) * (up_equiv_.size() + dn_check_.size() + dn_equiv_.size() +
+                                                                  sx_.size() * 4 + tx_.size() * 7);
   } else {
     (void) comm;
     (void) own_sources;
     (void) want_pot;
     (void) same_points;
+  }
+}
+
+// operators of the cell size, and the grid kernels
+template <class K> void FmmEvaluator<K>::grid_operators(const GridGeometry &g)
+{
+  double t_setup = 0, s = 1.0;
+  ops_.assign(1, get_operator_set(make_unit_kernel(k_, g.h, s), p_, opt_.cache_dir, &t_setup));
+  scale_.assign(1, s);
+  if (!fft_ || fft_->p() != p_) fft_ = std::make_unique<M2LTransform>(p_);
+  const double tg = omp_get_wtime();
+  KernelSpec unit;    // Laplace, or Yukawa with kappa * H (unit cell)
+  if constexpr (std::is_same_v<K, YukawaKernel>) unit = KernelSpec{KernelType::Yukawa, k_.kappa * g.H};
+  grid_kernel_ = periodic_grid_kernel(unit, g.k, p_);
+  stats_.t_precompute = t_setup + (omp_get_wtime() - tg);
+  stats_.operator_bytes = ops_[0]->bytes() + grid_kernel_->bytes();
+}
+
+// P2M of the cells' own sources, batched
+template <class K> void FmmEvaluator<K>::grid_p2m(const GridGeometry &g)
+{
+  const std::vector<int> &sb = grid_src_begin_, &own_end = grid_own_end_;
+  const OperatorSet &op = *ops_[0];
+  const double s = scale_[0];
+  const int kc = g.kc, nchunks = (kc + kGridBatch - 1) / kGridBatch;
+#pragma omp parallel
+  {
+    SurfacePoints surf;
+    std::vector<double> chk, eq;
+#pragma omp for schedule(dynamic, 1)
+    for (int ch = 0; ch < nchunks; ++ch) {
+      const int b0 = ch * kGridBatch, m = std::min(kc, b0 + kGridBatch) - b0;
+      chk.assign((std::size_t) nsurf_ * m, 0.0);
+      for (int j = 0; j < m; ++j) {
+        const int b = b0 + j;
+        if (own_end[b] == sb[b]) continue;
+        double ctr[3];
+        grid_center(g, b, ctr);
+        box_surface(outer_, ctr, g.h, surf);
+        p2p<K, true, false, false>(k_, surface_span(surf, nullptr), source_range(sb[b], own_end[b] - sb[b]),
+                                   {&chk[(std::size_t) j * nsurf_]});
+      }
+      eq.resize(chk.size());
+      apply_pinv_batch(op.uc2e_a, op.uc2e_b, nsurf_, op.rank, chk.data(), m, eq.data(), 1.0 / s);
+      std::copy(eq.begin(), eq.end(), up(b0));
+    }
+  }
+}
+
+// M2L: surface spectra of all cells -> convolution over the cells -> check potentials
+template <class K> void FmmEvaluator<K>::grid_m2l(const GridGeometry &g, const std::vector<double> &occupied)
+{
+  const std::vector<int> &tb = grid_trg_begin_;
+  const GridKernel &gk = *grid_kernel_;
+  const int nf = gk.nfreq, kc = g.kc;
+  const double s = scale_[0];
+  std::complex<double> *z = grid_spectra_.get((std::size_t) nf * kc);
+  const int nblk = nf / 16;
+#pragma omp parallel
+  {
+    M2LTransform::Workspace ws(*fft_);
+    std::vector<double> chunk((std::size_t) nblk * 32);
+#pragma omp for schedule(static)
+    for (int b = 0; b < kc; ++b) {
+      std::complex<double> *zb = z + (std::size_t) b * nf;
+      if (occupied[b] == 0) {
+        std::fill(zb, zb + nf, std::complex<double>(0.0));
+        continue;
+      }
+      fft_->forward(up(b), chunk.data(), 32, ws);
+      for (int f = 0; f < nf; ++f)
+        zb[f] = std::complex<double>(chunk[(f / 16) * 32 + f % 16], chunk[(f / 16) * 32 + 16 + f % 16]);
+    }
+#pragma omp for schedule(dynamic, 1)
+    for (int blk = 0; blk < nblk; ++blk) grid_convolve(gk, z, 16 * blk, 16 * blk + 16);
+#pragma omp for schedule(static)
+    for (int b = 0; b < kc; ++b) {
+      if (tb[b + 1] == tb[b]) continue;
+      for (int f = 0; f < nf; ++f) {
+        const std::complex<double> v = z[(std::size_t) b * nf + f];
+        chunk[(f / 16) * 32 + f % 16] = v.real();
+        chunk[(f / 16) * 32 + 16 + f % 16] = v.imag();
+      }
+      fft_->inverse_add(chunk.data(), 32, dcheck(b), s, ws);
+    }
+  }
+}
+
+// check -> downward equivalent (batched), L2P
+template <class K> void FmmEvaluator<K>::grid_l2p(const GridGeometry &g, bool want_pot)
+{
+  const std::vector<int> &tb = grid_trg_begin_;
+  const OperatorSet &op = *ops_[0];
+  const double s = scale_[0];
+  const int kc = g.kc, nchunks = (kc + kGridBatch - 1) / kGridBatch;
+#pragma omp parallel
+  {
+    SurfacePoints surf;
+    std::vector<double> eq;
+#pragma omp for schedule(dynamic, 1)
+    for (int ch = 0; ch < nchunks; ++ch) {
+      const int b0 = ch * kGridBatch, m = std::min(kc, b0 + kGridBatch) - b0;
+      eq.resize((std::size_t) nsurf_ * m);
+      apply_pinv_batch(op.dc2e_a, op.dc2e_b, nsurf_, op.rank, dcheck(b0), m, eq.data(), 1.0 / s);
+      std::copy(eq.begin(), eq.end(), dequiv(b0));
+      for (int b = b0; b < b0 + m; ++b) {
+        if (tb[b + 1] == tb[b]) continue;
+        double ctr[3];
+        grid_center(g, b, ctr);
+        box_surface(outer_, ctr, g.h, surf);
+        p2p_pg<K, false>(k_, want_pot, target_range(tb[b], tb[b + 1] - tb[b]), surface_span(surf, dequiv(b)),
+                         result_at(tb[b]));
+      }
+    }
+  }
+}
+
+// Near field, sources = targets: each cell with itself and its 26 neighbours (images: shift in
+// {-1,0,1}^3), pair by pair for both cells (13 of the 26 offsets). Returns the coincident pairs.
+template <class K> std::size_t FmmEvaluator<K>::grid_near_mutual(const GridGeometry &g, bool want_pot)
+{
+  const std::vector<int> &sb = grid_src_begin_;
+  std::vector<int> self;
+  std::vector<MutualPair> pairs;
+  for (int b = 0; b < g.kc; ++b) {
+    if (sb[b + 1] == sb[b]) continue;
+    self.push_back(b);
+    for (int o = 14; o < 27; ++o) {
+      MutualPair pr;
+      pr.a = b;
+      pr.b = grid_neighbour(b, o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, pr.shift);
+      if (sb[pr.b + 1] > sb[pr.b]) pairs.push_back(pr);
+    }
+  }
+  stats_.mutual_pairs = pairs.size();
+  return run_mutual_tasks(g.kc, self, pairs, [&](int a, int b, const signed char *sh, bool self_pair) {
+    const double d[3] = {sh[0] * g.L, sh[1] * g.L, sh[2] * g.L};
+    const MutualSpan sa{source_range(sb[a], sb[a + 1] - sb[a]), result_at(sb[a])},
+        sbb{source_range(sb[b], sb[b + 1] - sb[b]), result_at(sb[b])};
+    std::size_t z0 = 0;
+    if (want_pot) p2p_mutual<K, true>(k_, self_pair, sa, sbb, d, &z0);
+    else p2p_mutual<K, false>(k_, self_pair, sa, sbb, d, &z0);
+    return z0;
+  });
+}
+
+// Near field, one-sided: targets moved by -shift L see the sources of the image at +shift L.
+// Returns the coincident pairs.
+template <class K> std::size_t FmmEvaluator<K>::grid_near_one_sided(const GridGeometry &g, bool want_pot)
+{
+  const std::vector<int> &sb = grid_src_begin_, &tb = grid_trg_begin_;
+  const double L = g.L;
+  std::vector<std::size_t> zc(g.kc, 0);
+#pragma omp parallel
+  {
+    std::vector<double> x, y, zz;
+#pragma omp for schedule(dynamic, 1)
+    for (int b = 0; b < g.kc; ++b) {
+      const std::size_t t = tb[b], n = tb[b + 1] - tb[b];
+      if (n == 0) continue;
+      x.resize(n);
+      y.resize(n);
+      zz.resize(n);
+      for (int o = 0; o < 27; ++o) {
+        signed char sh[3];
+        const int a = grid_neighbour(b, o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, sh);
+        for (std::size_t i = 0; i < n; ++i) {
+          x[i] = tx_[t + i] - sh[0] * L;
+          y[i] = ty_[t + i] - sh[1] * L;
+          zz[i] = tz_[t + i] - sh[2] * L;
+        }
+        p2p_pg<K, true>(k_, want_pot, {n, x.data(), y.data(), zz.data()}, source_range(sb[a], sb[a + 1] - sb[a]),
+                        result_at(t), &zc[b]);
+      }
+    }
+  }
+  std::size_t zeros = 0;
+  for (std::size_t v : zc) zeros += v;
+  return zeros;
+}
+
+// Laplace: the kernels subtract quad |r|^2 at the separation r of the class representative
+// (the image of the source cell nearest to the target cell, r = x - y + L m with m in
+// {-1,0,1}^3 per cell pair), the moments add it back at x - y: add the difference
+// quad (2 L m.(x - y) + L^2 |m|^2) = quad (2 L (alpha.x - beta) + L^2 gamma) with, per target
+// cell, alpha_d = sum_s m_d Q_s, beta = sum_s m.P_s, gamma = sum_s |m|^2 Q_s (Q_s, P_s: charge
+// and dipole of source cell s). m_d depends on the cells' indices along axis d only: the sums
+// are over the per-axis marginals of Q and P (O(k^2) per axis).
+template <class K>
+void FmmEvaluator<K>::grid_wrap_correction(const GridGeometry &g, Communicator *comm, double quad, bool want_pot)
+{
+  const std::vector<int> &sb = grid_src_begin_, &tb = grid_trg_begin_, &own_end = grid_own_end_;
+  const int k = g.k, kc = g.kc;
+  const double L = g.L, *c = opt_.root_center;
+  std::vector<double> Qa(3 * (std::size_t) k, 0.0), Pa(3 * (std::size_t) k, 0.0);
+  for (int b = 0; b < kc; ++b) {
+    const int sa[3] = {b / (k * k), (b / k) % k, b % k};
+    for (int j = sb[b]; j < own_end[b]; ++j) {
+      const double y[3] = {sx_[j] - c[0], sy_[j] - c[1], sz_[j] - c[2]};
+      for (int d = 0; d < 3; ++d) {
+        Qa[d * k + sa[d]] += sq_[j];
+        Pa[d * k + sa[d]] += sq_[j] * y[d];
+      }
+    }
+  }
+  grid_reduce(comm, Qa.data(), Qa.size());
+  grid_reduce(comm, Pa.data(), Pa.size());
+  auto wrap_of = [k](int t, int s) { return (grid_class_representative(t - s, k) - (t - s)) / k; };
+  std::vector<double> A(3 * (std::size_t) k, 0.0), B(3 * (std::size_t) k, 0.0), C(3 * (std::size_t) k, 0.0);
+  for (int d = 0; d < 3; ++d)
+    for (int t = 0; t < k; ++t)
+      for (int s2 = 0; s2 < k; ++s2) {
+        const int m = wrap_of(t, s2);
+        A[d * k + t] += m * Qa[d * k + s2];
+        B[d * k + t] += m * Pa[d * k + s2];
+        C[d * k + t] += m * m * Qa[d * k + s2];
+      }
+#pragma omp parallel for schedule(static)
+  for (int t = 0; t < kc; ++t) {
+    const int ta[3] = {t / (k * k), (t / k) % k, t % k};
+    const double alpha[3] = {A[ta[0]], A[k + ta[1]], A[2 * k + ta[2]]};
+    const double beta = B[ta[0]] + B[k + ta[1]] + B[2 * k + ta[2]];
+    const double gamma = C[ta[0]] + C[k + ta[1]] + C[2 * k + ta[2]];
+    const double g2 = 2 * quad * L;    // gradient: g2 alpha (fused multiply-add into the accumulators)
+    for (int i = tb[t]; i < tb[t + 1]; ++i) {
+      const double x[3] = {tx_[i] - c[0], ty_[i] - c[1], tz_[i] - c[2]};
+      if (want_pot)
+        tp_[i] += quad * (2 * L * (alpha[0] * x[0] + alpha[1] * x[1] + alpha[2] * x[2] - beta) + L * L * gamma);
+      tgx_[i] = std::fma(g2, alpha[0], tgx_[i]);
+      tgy_[i] = std::fma(g2, alpha[1], tgy_[i]);
+      tgz_[i] = std::fma(g2, alpha[2], tgz_[i]);
+    }
   }
 }
 

@@ -4,7 +4,8 @@
 // size: kifmm::choose_order, then kifmm::plan_tree and the choice from the points,
 // kifmm::choose_tree_from_points) or ACC:LEAF (order chosen for ACC, leaf size given).
 // Timed: Evaluator::evaluate (tree, lists, all passes; potential and gradient of all points),
-// after one untimed evaluation that builds the operators. Not timed, reported: the tree choice
+// after W untimed evaluations (--warmup; an evaluation that built operators is never timed).
+// Not timed, reported: the tree choice
 // from the points (choice=, seconds) and the operator precomputation (precompute=).
 // Usage: anchors_ours PROBLEM_FILE --settings ACC[:LEAF],... [--reps R] [--warmup W]
 #include "anchors_problem.h"
@@ -32,10 +33,15 @@ int main(int argc, char **argv)
     char setting[64];
     std::snprintf(setting, sizeof(setting), leaf > 0 ? "acc%g:leaf%d" : "acc%g", acc, leaf);
     for (int r = -a.warmup; r < a.reps; ++r) {
-      const anchors::Clock t0 = anchors::Clock::now();
-      ev->evaluate(p.n, p.xyz.data(), p.q.data(), p.n, p.xyz.data(), pot.data(), grad.data());
-      const anchors::Clock t = anchors::Clock::now() - t0;
-      t_pre += ev->stats().t_precompute;
+      anchors::Clock t{0, 0};
+      // an evaluation that built operators (the first of this order, also without warm-up) is
+      // repeated: the operator precomputation is not timed
+      do {
+        const anchors::Clock t0 = anchors::Clock::now();
+        ev->evaluate(p.n, p.xyz.data(), p.q.data(), p.n, p.xyz.data(), pot.data(), grad.data());
+        t = anchors::Clock::now() - t0;
+        t_pre += ev->stats().t_precompute;
+      } while (ev->stats().t_precompute > 0);
       if (r < 0) continue;
       const double err = anchors::gradient_error(p, grad.data(), 1.0);
       char extra[160];

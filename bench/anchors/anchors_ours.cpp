@@ -5,8 +5,8 @@
 // kifmm::choose_tree_from_points) or ACC:LEAF (order chosen for ACC, leaf size given).
 // Timed: Evaluator::evaluate (tree, lists, all passes; potential and gradient of all points),
 // after W untimed evaluations (--warmup; an evaluation that built operators is never timed).
-// Not timed, reported: the tree choice
-// from the points (choice=, seconds) and the operator precomputation (precompute=).
+// Not timed, reported: the tree choice from the points (choice=, seconds) and the operator
+// precomputation (precompute=).
 // Usage: anchors_ours PROBLEM_FILE --settings ACC[:LEAF],... [--reps R] [--warmup W]
 #include "anchors_problem.h"
 #include "kifmm.h"

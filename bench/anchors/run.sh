@@ -13,7 +13,7 @@
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 cd "$root"
-command_line="bash bench/anchors/run.sh $*"
+command_line="bash bench/anchors/run.sh${*:+ $*}"
 build="${1:-build-anchors}"
 
 sets="${ANCHORS_SETS:-uniform:1e5 plummer:1e5 uniform:1e6}"
@@ -71,6 +71,7 @@ stamp="$(date -u +%Y%m%dT%H%M%SZ)"
 raw="$data/rows_$stamp.txt"
 : >"$raw"
 load_before="$(cat /proc/loadavg)"
+started="$(date -u '+%Y-%m-%d %H:%M:%S UTC')"
 for s in $sets; do
   name="${s%%:*}" n="${s##*:}"
   f="$data/${name}_$n.bin"
@@ -165,11 +166,11 @@ out="bench/anchors/results/anchors_$(git rev-parse --short HEAD)_$stamp.md"
   echo "# Anchor benchmark: ours vs PVFMM and exafmm-t"
   echo
   echo "- command: \`OMP_NUM_THREADS=$threads $command_line\`"
-  echo "- date: $(date -u '+%Y-%m-%d %H:%M:%S UTC')"
+  echo "- date: $started to $(date -u '+%H:%M:%S UTC')"
   echo "- our commit: $ours_commit"
   [ -n "$pvfmm_src" ] && echo "- PVFMM commit: $(commit_of "$pvfmm_src") (SCTL $(commit_of "$pvfmm_src/SCTL"))"
   [ -n "$exafmmt_src" ] && echo "- exafmm-t commit: $(commit_of "$exafmmt_src")"
-  echo "- machine: \`$(uname -a)\`, nproc $(nproc), $(grep -m1 'model name' /proc/cpuinfo | sed 's/.*: //')"
+  echo "- machine: \`$(uname -a)\`, nproc $(env -u OMP_NUM_THREADS -u OMP_THREAD_LIMIT nproc), $(grep -m1 'model name' /proc/cpuinfo | sed 's/.*: //')"
   echo "- load average before: $load_before; after: $load_after"
   echo "- threads: OMP_NUM_THREADS=$threads (OPENBLAS_NUM_THREADS=$threads), one MPI process (PVFMM)"
   echo "- compiler: $(c++ --version | head -1); ours: -O3 -march=native -mprefer-vector-width=512" \

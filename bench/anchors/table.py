@@ -121,7 +121,7 @@ def table(rows, targets):
     out.append("|---|---|---|---|---|---|---|---|---|")
     for s, n, t, code, fast, per, m, w in ratios:
         out.append(f"| {s} | {n:.0e} | {t:g} | {code} | {fast} | " + ", ".join(f"{x:.2f}" for x in per)
-                   + f" | {m:.2f} | {w:.2f} | {'yes' if m <= 0.67 else 'no'} |")
+                   + f" | {m:.3f} | {w:.2f} | {'yes' if m <= 0.67 else 'no'} |")
     return "\n".join(out)
 
 

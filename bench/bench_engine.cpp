@@ -143,7 +143,7 @@ int tree_choice(int argc, char **argv)
   std::vector<bench::NamedPoints> cfgs = bench::uniform_and_plummer(sizes, plum);
   for (const std::string &f : files) {
     std::string name = std::filesystem::path(f).stem().string();
-    cfgs.push_back({name, read_charge_data(f)});
+    cfgs.push_back({name, bench::read_charge_data(f)});
   }
   const char *variant[3] = {"old", "uniform", "points"};
   std::printf("| points | N | p | leaf old / uniform / points | depth old / uniform / points | CPU s per evaluation old / uniform / points (medians) | points/old | points/uniform | uniform/old | force error old / uniform / points | choice s |\n");

@@ -9,13 +9,16 @@
 // `calibrate --cost [--orders 3-14] [--reps 3]` regenerates the cost-model constants (kCost in
 // calibration.cpp, see cost_model.h): for each order, single-thread CPU time (minimum of
 // --reps) of evaluations of uniform points in the cube [-1,1]^3 (neutral charges, sources =
-// targets, fixed root) for both boundaries at N = 1e4, 3e4 (and 1e5 for orders <= 8) and the
-// depths with 8 to 600 points per leaf (leaf_size_for_depth), and of clustered points (open,
-// bounding cube; two Plummer spheres, N = 1e4, 3e4, leaf sizes 16 .. 1024), then the
+// targets, fixed root) for both boundaries at N = 3e3, 1e4, 3e4 (1e5 for orders <= 8, 1e6 for
+// order 3) and the depths with 8 to 4000 points per leaf (leaf_size_for_depth), and of
+// clustered points (open, bounding cube; two Plummer spheres, N = 1e4, 3e4, leaf sizes 16 ..
+// 4096), then the
 // non-negative least-squares fit (relative residuals) of cost = point*N + pair*(near +
 // self_extra*self) + translation*trans + cell*cells + entry*entries to them, with the counts of
 // the actual trees (actual_tree_counts, cost_model.h).
 // Prints the table rows (ns) on stdout, the measured and fitted times on stderr.
+// `calibrate --refit COST.err` fits again from those measured times (stderr of --cost), with
+// the counts of the trees computed anew (a changed model, no new measurements).
 //
 // `calibrate --grid-cost [--orders 3-10] [--reps 3]` regenerates kGridCost (calibration.cpp): the
 // per-cell constant of the periodic single-level grid (grid_cost_fit below).
@@ -45,6 +48,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
+#include <map>
 #include <random>
 #include <string>
 
@@ -59,20 +63,19 @@ double cpu_now()
   return t.tv_sec + 1e-9 * t.tv_nsec;
 }
 
-int cost_fit(int order_lo, int order_hi, int reps)
+// The point sets of the cost fit: uniform in [-1,1]^3 (neutral charges; both boundaries, fixed
+// root) and clustered ones (open, bounding cube): a Plummer sphere of scale 0.05 in the unit
+// cube (the bench/solvers "plummer" case) and bench::plummer (scale 1, cut at r = 50)
+struct CostSet {
+  std::string name;
+  bench::Points p;
+  bool clustered;
+};
+
+std::vector<CostSet> cost_sets()
 {
-  std::printf("    // order, point, pair, translation, cell, entry (ns)   [rms relative residual of the fit]\n");
-  constexpr int K = 5;
-  // point sets: uniform in [-1,1]^3 (both boundaries; depths with 8 to 600 points per leaf) and
-  // clustered ones (open; leaf sizes 16 .. 1024): a Plummer sphere of scale 0.05 in the unit
-  // cube (the bench/solvers "plummer" case) and bench::plummer (scale 1, cut at r = 50)
-  struct Set {
-    std::string name;
-    bench::Points p;
-    bool clustered;
-  };
-  std::vector<Set> sets;
-  for (std::size_t n : {10000, 30000, 100000}) {
+  std::vector<CostSet> sets;
+  for (std::size_t n : {3000, 10000, 30000, 100000, 1000000}) {
     bench::Points p = bench::uniform(n, 2024);
     double s = 0;
     for (double q : p.q) s += q;
@@ -83,35 +86,121 @@ int cost_fit(int order_lo, int order_hi, int reps)
     sets.push_back({"plummer0.05", bench::plummer_box(n, 7, 0.05), true});
     sets.push_back({"plummer", bench::plummer(n, 8), true});
   }
+  return sets;
+}
+
+Options cost_options(const CostSet &set, int order, int leaf, bool periodic)
+{
+  Options o;
+  o.order = order;
+  o.leaf_size = leaf;
+  if (!set.clustered) {
+    o.fixed_root = true;
+    o.root_half_width = 1.0;
+  }
+  o.periodic = periodic;
+  return o;
+}
+
+constexpr int kCostColumns = 6;
+using CostRowValues = std::array<double, kCostColumns>;
+
+// the columns of the fit for one tree: n, near (+ self extra), translations, cells, entries, spilled
+CostRowValues cost_columns(const CostSet &set, const Options &o)
+{
+  const std::size_t n = set.p.size();
+  const TreeCounts c = actual_tree_counts(KernelSpec{}, o, n, set.p.xyz.data(), o.leaf_size);
+  return {(double) n, c.near_pairs + self_pair_extra() * c.self_pairs, c.translations, c.cells, c.entries,
+          c.spilled_translations};
+}
+
+// Non-negative least squares of the relative residuals (each equation divided by its time,
+// columns scaled to O(1)) by enumeration: the best fit over the subsets of the columns whose
+// solution has no negative constant (translation and cell terms are nearly collinear). Prints
+// the table row on stdout, measured and fitted times on stderr.
+void fit_cost_row(int order, const std::vector<CostRowValues> &rows, const std::vector<double> &times,
+                  const std::vector<std::string> &labels)
+{
+  constexpr int K = kCostColumns;
+  const int ne = (int) rows.size();
+  if (ne == 0) return;
+  Eigen::MatrixXd A(ne, K);
+  Eigen::VectorXd b(ne);
+  double colscale[K] = {};
+  for (int i = 0; i < ne; ++i)
+    for (int k = 0; k < K; ++k) colscale[k] = std::max(colscale[k], rows[i][k] / times[i]);
+  for (int k = 0; k < K; ++k)
+    if (colscale[k] == 0) colscale[k] = 1;
+  for (int i = 0; i < ne; ++i) {
+    for (int k = 0; k < K; ++k) A(i, k) = rows[i][k] / times[i] / colscale[k];
+    b(i) = 1.0;
+  }
+  double c[K] = {}, best = 1e300, rms = 0;
+  for (int mask = 1; mask < (1 << K); ++mask) {
+    std::vector<int> cols;
+    for (int k = 0; k < K; ++k)
+      if (mask >> k & 1) cols.push_back(k);
+    Eigen::MatrixXd As(ne, (int) cols.size());
+    for (std::size_t j = 0; j < cols.size(); ++j) As.col((int) j) = A.col(cols[j]);
+    const Eigen::VectorXd x = As.colPivHouseholderQr().solve(b);
+    if ((x.array() < 0).any()) continue;
+    const double r = (As * x - b).squaredNorm();
+    if (r < best) {
+      best = r;
+      for (int k = 0; k < K; ++k) c[k] = 0;
+      for (std::size_t j = 0; j < cols.size(); ++j) c[cols[j]] = x((int) j) / colscale[cols[j]];
+    }
+  }
+  for (int i = 0; i < ne; ++i) {
+    double f = 0;
+    for (int k = 0; k < K; ++k) f += c[k] * rows[i][k];
+    rms += (f / times[i] - 1) * (f / times[i] - 1);
+    std::fprintf(stderr,
+                 "order %d %s: near %.3g trans %.3g cells %.0f entries %.0f spilled %.3g: measured %.4f s, "
+                 "model %.4f s\n",
+                 order, labels[i].c_str(), rows[i][1], rows[i][2], rows[i][3], rows[i][4], rows[i][5], times[i], f);
+  }
+  std::printf("    {%d, %.4g, %.4g, %.4g, %.4g, %.4g, %.4g},    // [%.3f]\n", order, 1e9 * c[0], 1e9 * c[1],
+              1e9 * c[2], 1e9 * c[3], 1e9 * c[4], 1e9 * c[5], std::sqrt(rms / ne));
+  std::fflush(stdout);
+  std::fflush(stderr);
+}
+
+std::string cost_label(const CostSet &set, int leaf, int depth, bool periodic)
+{
+  char b[96];
+  std::snprintf(b, sizeof b, "%s N %zu leaf %d depth %d %s", set.name.c_str(), set.p.size(), leaf, depth,
+                periodic ? "periodic" : "open");
+  return b;
+}
+
+int cost_fit(int order_lo, int order_hi, int reps)
+{
+  std::printf("    // order, point, pair, translation, cell, entry, spill (ns)   [rms relative residual of the fit]\n");
+  const std::vector<CostSet> sets = cost_sets();
   for (int order = order_lo; order <= order_hi; ++order) {
-    std::vector<std::array<double, K>> rows;
+    std::vector<CostRowValues> rows;
     std::vector<double> times;
     std::vector<std::string> labels;
-    for (const Set &set : sets) {
+    for (const CostSet &set : sets) {
       const bench::Points &p = set.p;
       const std::size_t n = p.size();
       if (n > 30000 && order > 8) continue;
+      if (n > 100000 && order > 3) continue;
       std::vector<double> pot(n), g(3 * n);
       std::vector<std::pair<int, int>> trees;    // (leaf, periodic)
       if (set.clustered) {
-        for (int leaf : {16, 32, 64, 128, 256, 512, 1024}) trees.push_back({leaf, 0});
+        for (int leaf : {16, 32, 64, 128, 256, 512, 1024, 2048, 4096}) trees.push_back({leaf, 0});
       } else {
-        for (int depth = 1; depth <= 8; ++depth) {
+        for (int depth = 0; depth <= 8; ++depth) {
           const double m = n / std::ldexp(1.0, 3 * depth);
-          if (m < 8 || m > 600) continue;
+          if (m < 8 || m > 4000) continue;
           trees.push_back({leaf_size_for_depth(n, depth), 0});
           trees.push_back({leaf_size_for_depth(n, depth), 1});
         }
       }
       for (auto [leaf, periodic] : trees) {
-        Options o;
-        o.order = order;
-        o.leaf_size = leaf;
-        if (!set.clustered) {
-          o.fixed_root = true;
-          o.root_half_width = 1.0;
-        }
-        o.periodic = periodic;
+        const Options o = cost_options(set, order, leaf, periodic);
         auto ev = make_evaluator(KernelSpec{}, o);
         ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());    // operators
         double t = 1e30;
@@ -120,55 +209,53 @@ int cost_fit(int order_lo, int order_hi, int reps)
           ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());
           t = std::min(t, cpu_now() - c0);
         }
-        const TreeCounts c = actual_tree_counts(KernelSpec{}, o, n, p.xyz.data(), leaf);
-        rows.push_back({(double) n, c.near_pairs + self_pair_extra() * c.self_pairs, c.translations, c.cells, c.entries});
+        rows.push_back(cost_columns(set, o));
         times.push_back(t);
-        char b[96];
-        std::snprintf(b, sizeof b, "%s N %zu leaf %d depth %d %s", set.name.c_str(), n, leaf, ev->stats().depth,
-                      periodic ? "periodic" : "open");
-        labels.push_back(b);
+        labels.push_back(cost_label(set, leaf, ev->stats().depth, periodic));
       }
     }
-    // least squares, relative (each equation divided by its time), columns scaled to O(1)
-    const int ne = (int) rows.size();
-    Eigen::MatrixXd A(ne, K);
-    Eigen::VectorXd b(ne);
-    double colscale[K] = {0, 0, 0, 0, 0};
-    for (int i = 0; i < ne; ++i)
-      for (int k = 0; k < K; ++k) colscale[k] = std::max(colscale[k], rows[i][k] / times[i]);
-    for (int i = 0; i < ne; ++i) {
-      for (int k = 0; k < K; ++k) A(i, k) = rows[i][k] / times[i] / colscale[k];
-      b(i) = 1.0;
-    }
-    // non-negative least squares by enumeration: the best fit over the subsets of the columns
-    // whose solution has no negative constant (translation and cell terms are nearly collinear)
-    double c[K] = {0, 0, 0, 0, 0}, best = 1e300, rms = 0;
-    for (int mask = 1; mask < (1 << K); ++mask) {
-      std::vector<int> cols;
-      for (int k = 0; k < K; ++k)
-        if (mask >> k & 1) cols.push_back(k);
-      Eigen::MatrixXd As(ne, (int) cols.size());
-      for (std::size_t j = 0; j < cols.size(); ++j) As.col((int) j) = A.col(cols[j]);
-      const Eigen::VectorXd x = As.colPivHouseholderQr().solve(b);
-      if ((x.array() < 0).any()) continue;
-      const double r = (As * x - b).squaredNorm();
-      if (r < best) {
-        best = r;
-        for (int k = 0; k < K; ++k) c[k] = 0;
-        for (std::size_t j = 0; j < cols.size(); ++j) c[cols[j]] = x((int) j) / colscale[cols[j]];
-      }
-    }
-    for (int i = 0; i < ne; ++i) {
-      double f = 0;
-      for (int k = 0; k < K; ++k) f += c[k] * rows[i][k];
-      rms += (f / times[i] - 1) * (f / times[i] - 1);
-      std::fprintf(stderr, "order %d %s: near %.3g trans %.3g cells %.0f entries %.0f: measured %.4f s, model %.4f s\n",
-                   order, labels[i].c_str(), rows[i][1], rows[i][2], rows[i][3], rows[i][4], times[i], f);
-    }
-    std::printf("    {%d, %.4g, %.4g, %.4g, %.4g, %.4g},    // [%.3f]\n", order, 1e9 * c[0], 1e9 * c[1], 1e9 * c[2],
-                1e9 * c[3], 1e9 * c[4], std::sqrt(rms / ne));
-    std::fflush(stdout);
+    fit_cost_row(order, rows, times, labels);
   }
+  return 0;
+}
+
+// The fit again from the measured times that `calibrate --cost` printed on stderr (lines
+// "order P SET N n leaf L depth D open|periodic: ... measured T s, ..."), with the counts of the
+// trees computed anew: for a changed model, without measuring again.
+int cost_refit(const char *path)
+{
+  std::FILE *f = std::fopen(path, "r");
+  if (!f) {
+    std::fprintf(stderr, "calibrate --refit: cannot read %s\n", path);
+    return 1;
+  }
+  const std::vector<CostSet> sets = cost_sets();
+  std::map<int, std::vector<CostRowValues>> rows;
+  std::map<int, std::vector<double>> times;
+  std::map<int, std::vector<std::string>> labels;
+  char line[1024];
+  while (std::fgets(line, sizeof line, f)) {
+    int order, leaf, depth;
+    std::size_t n;
+    char name[64], boundary[16];
+    const char *m = std::strstr(line, "measured ");
+    double t;
+    if (!m || std::sscanf(line, "order %d %63s N %zu leaf %d depth %d %15[a-z]", &order, name, &n, &leaf, &depth,
+                          boundary) != 6 ||
+        std::sscanf(m, "measured %lf", &t) != 1)
+      continue;
+    const CostSet *set = nullptr;
+    for (const CostSet &s : sets)
+      if (s.name == name && s.p.size() == n) set = &s;
+    if (!set) continue;
+    const bool periodic = !std::strcmp(boundary, "periodic");
+    rows[order].push_back(cost_columns(*set, cost_options(*set, order, leaf, periodic)));
+    times[order].push_back(t);
+    labels[order].push_back(cost_label(*set, leaf, depth, periodic));
+  }
+  std::fclose(f);
+  std::printf("    // order, point, pair, translation, cell, entry, spill (ns)   [rms relative residual of the fit]\n");
+  for (auto &[order, r] : rows) fit_cost_row(order, r, times[order], labels[order]);
   return 0;
 }
 
@@ -317,6 +404,7 @@ int main(int argc, char **argv)
     if (argc > 3 && !std::strcmp(argv[2], "--orders")) std::sscanf(argv[3], "%d-%d", &lo, &hi);
     return periodic_errors(lo, hi);
   }
+  if (argc > 2 && !std::strcmp(argv[1], "--refit")) return cost_refit(argv[2]);
   if (argc > 1 && !std::strcmp(argv[1], "--cost")) {
     int lo = 3, hi = 14, reps = 3;
     for (int i = 2; i + 1 < argc; i += 2) {

@@ -15,6 +15,7 @@
 #include <climits>
 #include <cmath>
 #include <set>
+#include <unistd.h>
 #include <vector>
 
 namespace kifmm {
@@ -79,30 +80,31 @@ Choice choose_order(const KernelSpec &, double rel_force_error, bool periodic)
 
 namespace {
 // Per-order constants of the cost model in nanoseconds: point, near-field pair, M2L translation,
-// cell, entry (cost_model.h). Produced by `OMP_NUM_THREADS=1 ./bench/calibrate --cost`
-// (bench/calibrate.cpp): non-negative least squares over measured single-thread CPU times of
-// evaluations of uniform points (both boundaries, several N and depths) and of two Plummer
-// spheres (open, leaf sizes 16-1024), with the counts of their actual trees
-// (actual_tree_counts); in brackets the RMS relative residual of the fit (provenance of the
-// measurement: bench/results/README.md). The translation and cell terms are nearly collinear (a constant that
-// is 0 went to the others).
+// cell, entry, spill (cost_model.h). Produced by `OMP_NUM_THREADS=1 ./bench/calibrate --cost`
+// (bench/calibrate.cpp; the spill column by `calibrate --refit` of its measured times):
+// non-negative least squares over measured single-thread CPU times of evaluations of uniform
+// points (both boundaries, N = 3e3 - 1e5, and 1e6 at order 3; depths with 8 to 4000 points per
+// leaf) and of two Plummer spheres (open, leaf sizes 16-4096), with the counts of their actual
+// trees (actual_tree_counts); in brackets the RMS relative residual of the fit (provenance of
+// the measurement: bench/results/README.md). The translation and cell terms are nearly
+// collinear (a constant that is 0 went to the others).
 struct CostRow {
   int order;
-  double point, pair, translation, cell, entry;
+  double point, pair, translation, cell, entry, spill;
 };
 const CostRow kCost[] = {
-    {3, 324, 0.995, 46.79, 168.1, 484.7},    // [0.062]
-    {4, 403.6, 0.9608, 136.5, 0, 383.1},    // [0.050]
-    {5, 418.2, 0.9257, 187, 7598, 296.6},    // [0.074]
-    {6, 420.4, 0.9523, 335.6, 1.041e+04, 568.6},    // [0.048]
-    {7, 672.7, 0.9104, 521.7, 1.977e+04, 995.4},    // [0.039]
-    {8, 432.7, 0.9817, 483.4, 9.66e+04, 0},    // [0.066]
-    {9, 457.3, 0.9676, 176.8, 2.522e+05, 0},    // [0.083]
-    {10, 450.6, 1.037, 672.3, 2.545e+05, 0},    // [0.081]
-    {11, 370.5, 1.045, 716.8, 4.207e+05, 2667},    // [0.065]
-    {12, 218.5, 1.161, 1672, 5.694e+05, 584.6},    // [0.080]
-    {13, 131.7, 1.219, 1490, 8.413e+05, 0},    // [0.081]
-    {14, 0, 1.247, 1346, 9.57e+05, 3049},    // [0.084]
+    {3, 192.1, 0.5602, 24.75, 0, 650, 39.83},    // [0.095]
+    {4, 237.3, 0.5169, 74.71, 1.281e+04, 0, 2.833},    // [0.071]
+    {5, 274.2, 0.5242, 36.49, 9171, 1033, 147.2},    // [0.085]
+    {6, 261.7, 0.5463, 71.93, 5.829e+04, 0, 142.4},    // [0.088]
+    {7, 218.3, 0.5421, 125.9, 7.812e+04, 0, 80.38},    // [0.110]
+    {8, 278.9, 0.5662, 345.4, 1.28e+05, 0, 0},    // [0.095]
+    {9, 119, 0.5664, 136.5, 2.974e+05, 0, 417.4},    // [0.086]
+    {10, 71.51, 0.5988, 23.21, 2.907e+05, 1254, 1529},    // [0.108]
+    {11, 77.32, 0.5796, 0, 4.721e+05, 1481, 62.71},    // [0.135]
+    {12, 0, 0.6033, 0, 6.782e+05, 2556, 0},    // [0.137]
+    {13, 0, 0.6336, 0, 8.682e+05, 4855, 3528},    // [0.150]
+    {14, 142.5, 0.6344, 0, 1.105e+06, 0, 0},    // [0.159]
 };
 
 // Pair-cost weights of the counts beyond the fitted constants, measured 2026-11-23 (one thread,
@@ -119,6 +121,13 @@ constexpr double kOneSided = 0.7;
 // choose_tree from the points keeps the uniform choice unless another tree is modelled cheaper
 // by more than this fraction
 constexpr double kChoiceMargin = 0.05;
+
+// weight of a translation at a level of this many cells in TreeCounts::spilled_translations:
+// log2 of how far its frequency blocks exceed the per-core cache (0 while they fit)
+double spill_weight(double cells)
+{
+  return cells > m2l_cached_cells() ? std::log2(cells / m2l_cached_cells()) : 0.0;
+}
 
 // ordered pairs (i, j) of [0, n) with |i - j| <= 1 (adjacent or equal cells along one axis)
 double adjacent_1d(double n)
@@ -139,10 +148,12 @@ TreeCounts uniform_tree_counts(std::size_t n, int depth, bool periodic)
     const double s = std::ldexp(1.0, l), cells = s * s * s;
     t.cells += cells;
     if (l == 0) continue;
+    const double before = t.translations;
     if (periodic)
       t.translations += cells * (l == 1 ? 8.0 : l == 2 ? 56.0 : 189.0);
     else    // pairs whose parents are adjacent: parents' adjacent pairs, 2 x 2 children per axis
       t.translations += std::pow(4 * adjacent_1d(s / 2), 3) - std::pow(adjacent_1d(s), 3);
+    t.spilled_translations += spill_weight(cells) * (t.translations - before);
   }
   return t;
 }
@@ -160,7 +171,18 @@ CostConstants cost_constants(int order)
   const CostRow *r = &kCost[0];
   for (const CostRow &c : kCost)
     if (c.order <= order) r = &c;
-  return CostConstants{1e-9 * r->point, 1e-9 * r->pair, 1e-9 * r->translation, 1e-9 * r->cell, 1e-9 * r->entry};
+  return CostConstants{1e-9 * r->point, 1e-9 * r->pair,  1e-9 * r->translation,
+                       1e-9 * r->cell,  1e-9 * r->entry, 1e-9 * r->spill};
+}
+
+double m2l_cached_cells()
+{
+  static const double cells = [] {
+    long bytes = sysconf(_SC_LEVEL2_CACHE_SIZE);
+    if (bytes <= 0) bytes = 1L << 20;
+    return (double) bytes / 512.0;
+  }();
+  return cells;
 }
 
 double one_sided_weight()
@@ -177,7 +199,7 @@ double modelled_cost(int order, std::size_t n, const TreeCounts &t)
 {
   const CostConstants c = cost_constants(order);
   return c.point * (double) n + c.pair * (t.near_pairs + kSelfExtra * t.self_pairs) + c.translation * t.translations +
-      c.cell * t.cells + c.entry * t.entries;
+      c.cell * t.cells + c.entry * t.entries + c.spill * t.spilled_translations;
 }
 
 double modelled_cost(int order, std::size_t n, bool periodic, int depth)
@@ -240,7 +262,8 @@ TreeCounts tree_counts(const Octree &tree, const InteractionLists &lists, const 
   }
   t.near_pairs += kOneSided * one;
   // translations and cells: levels with expansions (periodic 1, 2: distinct source cells)
-  for (int l = periodic ? 0 : 2; l <= tree.depth; ++l)
+  for (int l = periodic ? 0 : 2; l <= tree.depth; ++l) {
+    const double before = t.translations;
     for (int c = tree.level_begin[l]; c < tree.level_begin[l + 1]; ++c) {
       t.cells += 1;
       if (periodic && l <= 2) {
@@ -250,6 +273,8 @@ TreeCounts tree_counts(const Octree &tree, const InteractionLists &lists, const 
         t.translations += lists.V.size(c);
       }
     }
+    t.spilled_translations += spill_weight(tree.level_begin[l + 1] - tree.level_begin[l]) * (t.translations - before);
+  }
   return t;
 }
 

@@ -14,8 +14,11 @@
 //   self  = the part of near made of pairs inside one leaf (m^2 / 2 per leaf)
 //   entries = unordered pairs of adjacent leaves (each leaf with itself included) and W, X list
 //           entries: the per-pair overhead of the near field (one task per leaf pair) and lists
+//   spilled = the translations of levels whose cells' frequency blocks exceed the per-core
+//           cache (m2l_cached_cells), weighted by log2 of the excess: their spectra come from
+//           the shared cache or memory, the more often the larger the level
 // cost = point * n + pair * (near + self_extra * self) + translation * trans + cell * cells
-//        + entry * entries,
+//        + entry * entries + spill * spilled,
 // with per-order constants (seconds) fitted by `bench/calibrate --cost` to measured evaluations
 // (calibration.cpp). self_extra: a leaf with itself runs the one-sided loop over all m^2
 // ordered pairs (p2p_mutual.h, AVX-512), not m^2 / 2 mutual ones; it decides depth 0 against
@@ -43,7 +46,15 @@ struct TreeCounts {
   double near_pairs = 0, translations = 0, cells = 0;
   double self_pairs = 0;    // part of near_pairs: pairs inside one leaf
   double entries = 0;       // near-field leaf pairs (a leaf with itself included) + W + X entries
+  // translations at levels with more cells than m2l_cached_cells(), whose frequency blocks do
+  // not stay in the per-core cache (m2l_parent_pairs streams them once per colleague slot),
+  // each weighted by log2(cells of the level / m2l_cached_cells())
+  double spilled_translations = 0;
 };
+
+// Cells of one level whose 16-frequency blocks (source and target: 512 bytes per cell) fit in
+// the per-core (L2) cache of this machine (sysconf; 1 MiB when unknown).
+double m2l_cached_cells();
 
 // Counts of a full tree of the given depth over n uniform points (see above).
 TreeCounts uniform_tree_counts(std::size_t n, int depth, bool periodic);
@@ -58,7 +69,7 @@ TreeCounts uniform_tree_counts(std::size_t n, int depth, bool periodic);
 int leaf_size_for_depth(std::size_t n, int depth);
 
 struct CostConstants {
-  double point = 0, pair = 0, translation = 0, cell = 0, entry = 0;    // seconds each
+  double point = 0, pair = 0, translation = 0, cell = 0, entry = 0, spill = 0;    // seconds each
 };
 CostConstants cost_constants(int order);
 

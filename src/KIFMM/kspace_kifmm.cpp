@@ -4,7 +4,6 @@
 #include "kifmm_force_schedule.h"
 #include "kifmm_rigid_bodies.h"
 #include "mpi_communicator.h"
-#include "periodic.h"
 
 #include "atom.h"
 #include "comm.h"

@@ -8,7 +8,6 @@
 #include "kspace_kifmm.h"
 
 #include "kifmm_rigid_bodies.h"
-#include "periodic.h"
 
 #include "comm.h"
 #include "error.h"

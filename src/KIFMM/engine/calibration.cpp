@@ -283,7 +283,7 @@ TreeCounts tree_counts(const Octree &tree, const InteractionLists &lists, const 
 namespace {
 // Seconds per cell of the periodic single-level grid, in ns per order: produced by
 // `OMP_NUM_THREADS=1 ./bench/calibrate --grid-cost` (bench/calibrate.cpp; the point, pair and
-// entry terms are those of kCost), 2026-12-01, in brackets the RMS relative residual over the
+// entry terms are those of kCost), 2026-12-02, in brackets the RMS relative residual over the
 // grids with 8 to 1000 atoms per cell at N = 3e3, 1e4, 3e4 (the per-cell work grows slowly
 // with k: the convolution is O(log k) per cell, and the spectra leave the caches).
 struct GridRow {
@@ -291,14 +291,14 @@ struct GridRow {
   double cell;
 };
 const GridRow kGridCost[] = {
-    {3, 2463},         // [0.175]
-    {4, 6190},         // [0.075]
-    {5, 1.872e+04},    // [0.133]
-    {6, 3.229e+04},    // [0.079]
-    {7, 4.153e+04},    // [0.086]
-    {8, 9.161e+04},    // [0.129]
-    {9, 1.958e+05},    // [0.127]
-    {10, 1.937e+05},   // [0.108]
+    {3, 4173},    // [0.130]
+    {4, 1.221e+04},    // [0.138]
+    {5, 7310},    // [0.065]
+    {6, 3.453e+04},    // [0.069]
+    {7, 5.556e+04},    // [0.053]
+    {8, 7.857e+04},    // [0.032]
+    {9, 1.555e+05},    // [0.108]
+    {10, 1.41e+05},    // [0.081]
 };
 }    // namespace
 

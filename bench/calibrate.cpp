@@ -9,7 +9,7 @@
 // `calibrate --cost [--orders 3-14] [--reps 3]` regenerates the cost-model constants (kCost in
 // calibration.cpp, see cost_model.h): for each order, single-thread CPU time (minimum of
 // --reps) of evaluations of uniform points in the cube [-1,1]^3 (neutral charges, sources =
-// targets, fixed root) for both boundaries at N = 3e3, 1e4, 3e4 (1e5 for orders <= 8, 1e6 for
+// targets, fixed root) for both boundaries at N = 1e3, 3e3, 1e4, 3e4 (1e5 for orders <= 8, 1e6 for
 // order 3) and the depths with 8 to 4000 points per leaf (leaf_size_for_depth), and of
 // clustered points (open, bounding cube; two Plummer spheres, N = 1e4, 3e4, leaf sizes 16 ..
 // 4096), then the
@@ -17,6 +17,7 @@
 // self_extra*self) + translation*trans + cell*cells + entry*entries to them, with the counts of
 // the actual trees (actual_tree_counts, cost_model.h).
 // Prints the table rows (ns) on stdout, the measured and fitted times on stderr.
+// `--only-n N` measures only the point sets of that size (to add them to a log for --refit).
 // `calibrate --refit COST.err` fits again from those measured times (stderr of --cost), with
 // the counts of the trees computed anew (a changed model, no new measurements).
 //
@@ -75,7 +76,7 @@ struct CostSet {
 std::vector<CostSet> cost_sets()
 {
   std::vector<CostSet> sets;
-  for (std::size_t n : {3000, 10000, 30000, 100000, 1000000}) {
+  for (std::size_t n : {1000, 3000, 10000, 30000, 100000, 1000000}) {
     bench::Points p = bench::uniform(n, 2024);
     double s = 0;
     for (double q : p.q) s += q;
@@ -174,7 +175,7 @@ std::string cost_label(const CostSet &set, int leaf, int depth, bool periodic)
   return b;
 }
 
-int cost_fit(int order_lo, int order_hi, int reps)
+int cost_fit(int order_lo, int order_hi, int reps, std::size_t only_n)
 {
   std::printf("    // order, point, pair, translation, cell, entry, spill (ns)   [rms relative residual of the fit]\n");
   const std::vector<CostSet> sets = cost_sets();
@@ -185,6 +186,7 @@ int cost_fit(int order_lo, int order_hi, int reps)
     for (const CostSet &set : sets) {
       const bench::Points &p = set.p;
       const std::size_t n = p.size();
+      if (only_n && n != only_n) continue;
       if (n > 30000 && order > 8) continue;
       if (n > 100000 && order > 3) continue;
       std::vector<double> pot(n), g(3 * n);
@@ -407,11 +409,13 @@ int main(int argc, char **argv)
   if (argc > 2 && !std::strcmp(argv[1], "--refit")) return cost_refit(argv[2]);
   if (argc > 1 && !std::strcmp(argv[1], "--cost")) {
     int lo = 3, hi = 14, reps = 3;
+    std::size_t only_n = 0;
     for (int i = 2; i + 1 < argc; i += 2) {
       if (!std::strcmp(argv[i], "--orders")) std::sscanf(argv[i + 1], "%d-%d", &lo, &hi);
       else if (!std::strcmp(argv[i], "--reps")) reps = std::atoi(argv[i + 1]);
+      else if (!std::strcmp(argv[i], "--only-n")) only_n = (std::size_t) std::atof(argv[i + 1]);
     }
-    return cost_fit(lo, hi, reps);
+    return cost_fit(lo, hi, reps, only_n);
   }
   const std::size_t n = 100000, ns = 2000;
   bench::Points p = bench::uniform(n, 1);

@@ -255,11 +255,21 @@ void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::s
     m = kept_m;
     break;
   }
-  // another order than the run started with: the tree for that order (one rank, leaf not
-  // given), measured too; raised again if that tree does not meet the target
-  if (engine_options.order != first_order && kset.leaf <= 0 && !distributed()) {
+  // another order than the run started with: the tree for that order (leaf not given; one
+  // rank: from the atoms, several: the uniform choice, as the next run of these settings starts
+  // with), measured too; raised again if that tree does not meet the target
+  if (engine_options.order != first_order && kset.leaf <= 0) {
     const int leaf = engine_options.leaf_size, grid = engine_options.periodic_grid;
-    choose_tree_from_atoms();
+    if (distributed()) {
+      const kifmm::Options planned = kifmm::plan_tree(engine->options(), tree_request).options;
+      if (planned.leaf_size != leaf || planned.periodic_grid != grid) {
+        engine = kifmm::make_evaluator(kernel, planned);
+        engine_options = engine->options();
+        reported_first_evaluation = false;
+      }
+    } else {
+      choose_tree_from_atoms();
+    }
     if (engine_options.leaf_size != leaf || engine_options.periodic_grid != grid) {
       evaluate_points(want_potential, comm_time, nsrc);
       m = measure_error(nsamples);

@@ -116,20 +116,9 @@ std::map<long, std::vector<double>> atoms_by_id(LAMMPS *lmp)
     for (int d = 0; d < 3; ++d) mine.push_back(a->v[i][d]);
     for (int d = 0; d < 3; ++d) mine.push_back(a->omega[i][d]);
   }
-  int n = (int) mine.size(), nprocs;
-  MPI_Comm_size(lmp->world, &nprocs);
-  std::vector<int> counts(nprocs), displs(nprocs);
-  MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, lmp->world);
-  int total = 0;
-  for (int p = 0; p < nprocs; ++p) {
-    displs[p] = total;
-    total += counts[p];
-  }
-  std::vector<double> all(total);
-  MPI_Allgatherv(mine.data(), n, MPI_DOUBLE, all.data(), counts.data(), displs.data(),
-                 MPI_DOUBLE, lmp->world);
+  const std::vector<double> all = kifmm_test::gather_rows(lmp, mine, 10);
   std::map<long, std::vector<double>> out;
-  for (int k = 0; k + 10 <= total; k += 10)
+  for (std::size_t k = 0; k + 10 <= all.size(); k += 10)
     out[(long) all[k]] = std::vector<double>(all.begin() + k + 1, all.begin() + k + 10);
   return out;
 }

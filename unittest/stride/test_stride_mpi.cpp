@@ -47,22 +47,11 @@ class StrideMPI : public LammpsFixture {
   }
   std::map<int, int> owners()
   {
-    std::vector<int> mine;
-    for (int i = 0; i < lmp->atom->nlocal; ++i) mine.push_back((int) lmp->atom->tag[i]);
-    int n = (int) mine.size();
-    std::vector<int> counts(nprocs), displs(nprocs);
-    MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
-    int total = 0;
-    for (int p = 0; p < nprocs; ++p) {
-      displs[p] = total;
-      total += counts[p];
-    }
-    std::vector<int> all(total);
-    MPI_Allgatherv(mine.data(), n, MPI_INT, all.data(), counts.data(), displs.data(), MPI_INT,
-                   MPI_COMM_WORLD);
+    std::vector<double> mine;    // (atom ID, rank) rows
+    for (int i = 0; i < lmp->atom->nlocal; ++i) mine.insert(mine.end(), {(double) lmp->atom->tag[i], (double) me});
+    const std::vector<double> all = kifmm_test::gather_rows(lmp, mine, 2);
     std::map<int, int> out;
-    for (int p = 0; p < nprocs; ++p)
-      for (int k = 0; k < counts[p]; ++k) out[all[displs[p] + k]] = p;
+    for (std::size_t k = 0; k + 2 <= all.size(); k += 2) out[(int) all[k]] = (int) all[k + 1];
     return out;
   }
   double fv(int k) { return evaluate("f_st[" + std::to_string(k) + "]"); }

@@ -202,59 +202,73 @@ void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::s
   const double target = verify_margin * kset.accuracy;
   const int first_order = engine_options.order;
   const kifmm::KernelSpec kernel = engine->kernel();
-  MeasuredError m = measure_error(nsamples);
-  // evaluates again at another order (the tree and root of the current evaluator) and measures
-  auto use_order = [&](int order, const kifmm::Options &current) {
-    kifmm::Options opt = current;
-    opt.order = order;
-    engine = kifmm::make_evaluator(kernel, opt);
-    engine_options = engine->options();
-    reported_first_evaluation = false;
-    evaluate_points(want_potential, comm_time, nsrc);
-    return measure_error(nsamples);
-  };
-  // the next order while the target is missed
-  auto raise_order = [&]() {
-    while (m.worst() > target && engine_options.order < kifmm::max_calibrated_order()) {
-      const int from = engine_options.order;
+  // the evaluations of the search (kifmm::search_order): another order on the current tree and
+  // root, measured on these atoms; each step is logged
+  struct Trials : kifmm::OrderTrials {
+    KSpaceKIFMM &ks;
+    const kifmm::KernelSpec kernel;
+    bool want_potential;
+    double &comm_time;
+    std::size_t &nsrc;
+    int nsamples;
+    double target;
+    MeasuredError m;
+    struct Kept {
+      std::unique_ptr<kifmm::Evaluator> engine;
+      kifmm::Options options;
+      std::vector<double> grad, pot;
+      MeasuredError m;
+    } kept;
+    Trials(KSpaceKIFMM &k, bool wp, double &ct, std::size_t &ns, int nsam, double t) :
+        ks(k), kernel(k.engine->kernel()), want_potential(wp), comm_time(ct), nsrc(ns), nsamples(nsam), target(t),
+        m(k.measure_error(nsam))
+    {
+    }
+    double measure(int order) override
+    {
+      const int from = ks.engine_options.order;
       const double was = m.worst();
-      m = use_order(from + 1, engine->options());
-      if (comm->me == 0)
-        utils::logmesg(lmp,
-                       "  KIFMM order {} measured {:.3e} on these atoms > {:.3g} (3/4 of the "
-                       "request): order {} measured {:.3e} ({})\n",
-                       from, was, target, engine_options.order, m.worst(), m.describe());
+      kifmm::Options opt = ks.engine ? ks.engine->options() : kept.options;
+      opt.order = order;
+      ks.engine = kifmm::make_evaluator(kernel, opt);
+      ks.engine_options = ks.engine->options();
+      ks.reported_first_evaluation = false;
+      ks.evaluate_points(want_potential, comm_time, nsrc);
+      m = ks.measure_error(nsamples);
+      if (ks.comm->me != 0) return m.worst();
+      if (order > from)
+        utils::logmesg(ks.lmp,
+                       "  KIFMM order {} measured {:.3e} on these atoms > {:.3g} (3/4 of the request): "
+                       "order {} measured {:.3e} ({})\n",
+                       from, was, target, order, m.worst(), m.describe());
+      else
+        utils::logmesg(ks.lmp,
+                       "  KIFMM order {} measured {:.3e} on these atoms <= {:.3g} (half the target): "
+                       "order {} measured {:.3e}: {}\n",
+                       from, was, 0.5 * target, order, m.worst(),
+                       m.worst() >= 0 && m.worst() <= target ? std::string("taken")
+                                                            : fmt::format("order {} kept", from));
+      return m.worst();
     }
-  };
-  raise_order();
-  // a lower order may meet the target too (the calibration's errors are upper bounds for most
-  // atom sets): tried while the error is below half the target, kept if it meets the target
-  while (engine_options.order <= first_order && engine_options.order > min_tried_order &&
-         m.worst() >= 0 && m.worst() <= 0.5 * target) {
-    const int from = engine_options.order;
-    const MeasuredError kept_m = m;
-    const std::vector<double> kept_grad = grad, kept_pot = pot;
-    const kifmm::Options kept_options = engine->options();
-    std::unique_ptr<kifmm::Evaluator> kept = std::move(engine);
-    const MeasuredError lower = use_order(from - 1, kept_options);
-    const bool meets = lower.worst() <= target;
-    if (comm->me == 0)
-      utils::logmesg(lmp,
-                     "  KIFMM order {} measured {:.3e} on these atoms <= {:.3g} (half the target): "
-                     "order {} measured {:.3e}: {}\n",
-                     from, kept_m.worst(), 0.5 * target, from - 1, lower.worst(),
-                     meets ? std::string("taken") : fmt::format("order {} kept", from));
-    if (meets) {
-      m = lower;
-      continue;
+    void keep() override
+    {
+      kept.options = ks.engine->options();
+      kept.engine = std::move(ks.engine);
+      kept.grad = ks.grad;
+      kept.pot = ks.pot;
+      kept.m = m;
     }
-    engine = std::move(kept);
-    engine_options = kept_options;
-    grad = kept_grad;
-    pot = kept_pot;
-    m = kept_m;
-    break;
-  }
+    void restore() override
+    {
+      ks.engine = std::move(kept.engine);
+      ks.engine_options = kept.options;
+      ks.grad = kept.grad;
+      ks.pot = kept.pot;
+      m = kept.m;
+    }
+  } trials(*this, want_potential, comm_time, nsrc, nsamples, target);
+  const int max_order = kifmm::max_calibrated_order();
+  kifmm::search_order(trials, kifmm::OrderFound{first_order, trials.m.worst()}, target, min_tried_order, max_order);
   // another order than the run started with: the tree for that order (leaf not given; one
   // rank: from the atoms, several: the uniform choice, as the next run of these settings starts
   // with), measured too; raised again if that tree does not meet the target
@@ -272,10 +286,11 @@ void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::s
     }
     if (engine_options.leaf_size != leaf || engine_options.periodic_grid != grid) {
       evaluate_points(want_potential, comm_time, nsrc);
-      m = measure_error(nsamples);
-      raise_order();
+      trials.m = measure_error(nsamples);
+      kifmm::raise_order(trials, kifmm::OrderFound{engine_options.order, trials.m.worst()}, target, max_order);
     }
   }
+  const MeasuredError &m = trials.m;
   verified_error = m.worst();
   chosen_order = engine_options.order;
   if (comm->me == 0) {

@@ -188,6 +188,30 @@ TreePlan plan_tree(const Options &options, const TreeRequest &request, const Opt
 TreeChoice choose_tree_from_points(const KernelSpec &kernel, const TreeRequest &request, Options &options,
                                    std::size_t n, const double *xyz);
 
+
+// ---- the order for a requested accuracy, measured on the points (order_search.cpp)
+
+// The caller's side of an order search: evaluate at an order (its current tree and points) and
+// return the measured relative error there (< 0: not measured); keep the current evaluation
+// before a lower order is tried, and return to the kept one.
+class OrderTrials {
+ public:
+  virtual ~OrderTrials() = default;
+  virtual double measure(int order) = 0;
+  virtual void keep() = 0;
+  virtual void restore() = 0;
+};
+struct OrderFound {
+  int order;
+  double error;    // measured at that order
+};
+// From `at` (an order and its measured error): the next order while the error exceeds the
+// target, up to max_order.
+OrderFound raise_order(OrderTrials &trials, OrderFound at, double target, int max_order);
+// raise_order, then, while the error is below half the target, the order below (not below
+// min_order, not above start's), taken if its error meets the target, else the kept
+// evaluation restored: the lowest order measured to meet the target, one step at a time.
+OrderFound search_order(OrderTrials &trials, OrderFound start, double target, int min_order, int max_order);
 }    // namespace kifmm
 
 namespace kifmm {

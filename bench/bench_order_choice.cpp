@@ -1,0 +1,240 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
+// The order chosen for a requested accuracy against the error it gives. For each point set and
+// request, what kspace_style kifmm does on one rank: the calibrated order (choose_order), the
+// tree (plan_tree + choose_tree_from_points), then the order measured on the points
+// (search_order: 1000 sampled targets against the direct sum, the squared error scaled to all
+// points over the squared evaluated gradients of all points, target 3/4 of the request), the
+// tree chosen again for a changed order. Reported: the calibrated and the chosen order, the
+// error estimate of the search, the true relative RMS gradient error over ALL points against
+// the direct sum at the chosen order and at the order below (on the same tree), and the
+// verdicts: "meets" (true error <= request) and "tight" (the order below misses the request,
+// or the chosen error is at most 5x below it).
+//   bench_order_choice [--sets uniform,plummer,clusters] [--sizes 1e4,1e5]
+//                      [--requests 1e-3,1e-5,1e-7,1e-10] [--periodic]
+// Potential + gradient, sources = targets; periodic: points scaled into the cell [-1,1]^3,
+// neutral charges, reference the Ewald sum on the sample and order 14 over all points.
+#include "bench_points.h"
+#include "kifmm.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <numeric>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+std::vector<std::string> split(const std::string &s)
+{
+  std::vector<std::string> v;
+  std::stringstream ss(s);
+  std::string tok;
+  while (std::getline(ss, tok, ','))
+    if (!tok.empty()) v.push_back(tok);
+  return v;
+}
+
+double rel_rms(const std::vector<double> &a, const std::vector<double> &ref)
+{
+  double num = 0, den = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    num += (a[i] - ref[i]) * (a[i] - ref[i]);
+    den += ref[i] * ref[i];
+  }
+  return kifmm::relative_rms(num, den);
+}
+
+bench::Points into_cell(bench::Points p)
+{
+  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+  for (std::size_t i = 0; i < p.size(); ++i)
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::min(lo[d], p.xyz[3 * i + d]);
+      hi[d] = std::max(hi[d], p.xyz[3 * i + d]);
+    }
+  const double w = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-300});
+  double qsum = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    for (int d = 0; d < 3; ++d)
+      p.xyz[3 * i + d] = -0.999 + 1.998 * (p.xyz[3 * i + d] - 0.5 * (lo[d] + hi[d]) + 0.5 * w) / w;
+    qsum += p.q[i];
+  }
+  for (double &q : p.q) q -= qsum / p.size();
+  return p;
+}
+
+// An evaluation at an order on a fixed tree, and its sampled error (as kspace_style kifmm
+// measures it at the first evaluation of a run)
+struct Trials : kifmm::OrderTrials {
+  const kifmm::KernelSpec kernel;
+  const bench::Points &p;
+  kifmm::Options options;
+  std::vector<std::size_t> sample;
+  std::vector<double> sample_exact, grad, kept_grad;
+  kifmm::Options kept_options;
+  int evaluations = 0;
+  Trials(const bench::Points &pts, const kifmm::Options &o, std::vector<std::size_t> s, std::vector<double> exact) :
+      p(pts), options(o), sample(std::move(s)), sample_exact(std::move(exact)), grad(3 * pts.size())
+  {
+  }
+  double evaluate_and_measure()
+  {
+    const std::size_t n = p.size();
+    std::vector<double> pot(n);
+    kifmm::make_evaluator(kernel, options)->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(),
+                                                     grad.data());
+    ++evaluations;
+    double d2 = 0, r2 = 0, all2 = 0;
+    for (std::size_t k = 0; k < sample.size(); ++k)
+      for (int d = 0; d < 3; ++d) {
+        const double q = p.q[sample[k]], a = q * grad[3 * sample[k] + d], e = q * sample_exact[3 * k + d];
+        d2 += (a - e) * (a - e);
+        r2 += e * e;
+      }
+    for (std::size_t i = 0; i < n; ++i)
+      for (int d = 0; d < 3; ++d) all2 += p.q[i] * p.q[i] * grad[3 * i + d] * grad[3 * i + d];
+    return kifmm::sampled_relative_error(d2, r2, (double) sample.size(), (double) n, all2);
+  }
+  double measure(int order) override
+  {
+    options.order = order;
+    return evaluate_and_measure();
+  }
+  void keep() override
+  {
+    kept_options = options;
+    kept_grad = grad;
+  }
+  void restore() override
+  {
+    options = kept_options;
+    grad = kept_grad;
+  }
+};
+
+// relative RMS force error over all points (force_i = q_i grad_i) against the exact gradients
+double force_error(const bench::Points &p, const std::vector<double> &grad, const std::vector<double> &exact)
+{
+  std::vector<double> a(grad.size()), e(grad.size());
+  for (std::size_t i = 0; i < p.size(); ++i)
+    for (int d = 0; d < 3; ++d) {
+      a[3 * i + d] = p.q[i] * grad[3 * i + d];
+      e[3 * i + d] = p.q[i] * exact[3 * i + d];
+    }
+  return rel_rms(a, e);
+}
+
+std::vector<double> gradient_at(const bench::Points &p, const kifmm::Options &o)
+{
+  const std::size_t n = p.size();
+  std::vector<double> pot(n), grad(3 * n);
+  kifmm::make_evaluator(kifmm::KernelSpec{}, o)->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(),
+                                                          grad.data());
+  return grad;
+}
+
+void one_case(const std::string &name, const bench::Points &p, bool periodic, const std::vector<double> &requests)
+{
+  const std::size_t n = p.size();
+  const kifmm::KernelSpec kernel;
+  kifmm::Options base;
+  if (periodic) {
+    base.periodic = true;
+    base.fixed_root = true;
+    base.root_half_width = 1.0;
+  }
+  // the exact gradients of all points: direct sum (open), order 14 (periodic)
+  std::vector<double> exact(3 * n), pot(n);
+  if (periodic) {
+    kifmm::Options o = base;
+    o.order = 14;
+    o.leaf_size = kifmm::choose_tree(14, n, true).leaf_size;
+    exact = gradient_at(p, o);
+  } else {
+    kifmm::direct_sum(kernel, n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), exact.data());
+  }
+  std::vector<std::size_t> all(n);
+  std::iota(all.begin(), all.end(), 0);
+  const std::vector<std::size_t> sample = kifmm::sample_without_replacement(all, 1000, 1234567ULL);
+  std::vector<double> sample_exact(3 * sample.size());
+  for (std::size_t k = 0; k < sample.size(); ++k)
+    for (int d = 0; d < 3; ++d) sample_exact[3 * k + d] = exact[3 * sample[k] + d];
+  const kifmm::TreeRequest request{n, 0, periodic ? -1 : 0, false};
+  for (double acc : requests) {
+    const int calibrated = kifmm::choose_order(kernel, acc, periodic).order;
+    kifmm::Options o = base;
+    o.order = calibrated;
+    o = kifmm::plan_tree(o, request).options;
+    kifmm::choose_tree_from_points(kernel, request, o, n, p.xyz.data());
+    Trials t(p, o, sample, sample_exact);
+    const double target = 0.75 * acc;
+    const int max_order = kifmm::max_calibrated_order();
+    kifmm::OrderFound f = kifmm::search_order(t, {calibrated, t.evaluate_and_measure()}, target, 3, max_order);
+    if (f.order != calibrated) {    // the tree for the new order, measured again
+      const int leaf = t.options.leaf_size, grid = t.options.periodic_grid;
+      kifmm::choose_tree_from_points(kernel, request, t.options, n, p.xyz.data());
+      if (t.options.leaf_size != leaf || t.options.periodic_grid != grid)
+        f = kifmm::raise_order(t, {f.order, t.evaluate_and_measure()}, target, max_order);
+    }
+    const double err = force_error(p, t.grad, exact);
+    double below = -1;
+    if (f.order > 3) {
+      kifmm::Options lower = t.options;
+      lower.order = f.order - 1;
+      below = force_error(p, gradient_at(p, lower), exact);
+    }
+    const bool meets = err <= acc;
+    const bool tight = below < 0 || below > acc || err * 5 >= acc;
+    std::printf("| %s | %zu | %.0e | %d | %d | %.2e | %.2e | %.2e | %s | %s | %d |\n", name.c_str(), n, acc, calibrated,
+                f.order, f.error, err, below, meets ? "yes" : "**no**", tight ? "yes" : "**no**", t.evaluations);
+    std::fflush(stdout);
+  }
+}
+
+}    // namespace
+
+int main(int argc, char **argv)
+{
+  std::vector<std::string> sets = {"uniform", "plummer", "clusters"};
+  std::vector<double> sizes = {1e4, 1e5}, requests = {1e-3, 1e-5, 1e-7, 1e-10};
+  bool periodic = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto numbers = [&](const std::string &s) {
+      std::vector<double> v;
+      for (auto &t : split(s)) v.push_back(std::atof(t.c_str()));
+      return v;
+    };
+    if (a == "--sets" && i + 1 < argc) sets = split(argv[++i]);
+    else if (a == "--sizes" && i + 1 < argc) sizes = numbers(argv[++i]);
+    else if (a == "--requests" && i + 1 < argc) requests = numbers(argv[++i]);
+    else if (a == "--periodic") periodic = true;
+    else {
+      std::fprintf(stderr, "bench_order_choice: unknown option %s\n", a.c_str());
+      return 1;
+    }
+  }
+  std::printf("%s boundaries; error = relative RMS force error over all points against the %s\n\n",
+              periodic ? "periodic (cell [-1,1]^3, neutral charges)" : "open",
+              periodic ? "order-14 evaluation" : "direct sum");
+  std::printf("| points | N | request | order calibrated | order chosen | search estimate | error | error at order - 1 | "
+              "meets | tight | evaluations |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
+  for (double s : sizes)
+    for (const auto &name : sets) {
+      const std::size_t n = (std::size_t) s;
+      bench::Points p;
+      if (name == "uniform") p = kifmm_points::uniform_cube(n, 1);
+      else if (name == "plummer") p = kifmm_points::plummer(n, 2);
+      else if (name == "clusters") p = kifmm_points::two_clusters(n, 3);
+      else {
+        std::fprintf(stderr, "bench_order_choice: unknown point set %s\n", name.c_str());
+        return 1;
+      }
+      if (periodic) p = into_cell(p);
+      one_case(name, p, periodic, requests);
+    }
+  return 0;
+}

@@ -1,0 +1,35 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
+// The order for a requested accuracy, measured on the points (kifmm.h: raise_order,
+// search_order): the policy, with the caller's evaluations and error measurements.
+#include "kifmm.h"
+
+namespace kifmm {
+
+OrderFound raise_order(OrderTrials &trials, OrderFound at, double target, int max_order)
+{
+  while (at.error > target && at.order < max_order) {
+    const int next = at.order + 1;
+    at = OrderFound{next, trials.measure(next)};
+  }
+  return at;
+}
+
+OrderFound search_order(OrderTrials &trials, OrderFound start, double target, int min_order, int max_order)
+{
+  OrderFound at = raise_order(trials, start, target, max_order);
+  // a lower order may meet the target too (calibrated errors are upper bounds for most point
+  // sets): tried while the error is below half the target, taken if it meets the target
+  while (at.order <= start.order && at.order > min_order && at.error >= 0 && at.error <= 0.5 * target) {
+    trials.keep();
+    const OrderFound lower{at.order - 1, trials.measure(at.order - 1)};
+    if (lower.error >= 0 && lower.error <= target) {
+      at = lower;
+      continue;
+    }
+    trials.restore();
+    break;
+  }
+  return at;
+}
+
+}    // namespace kifmm

@@ -101,7 +101,9 @@ struct Trials : kifmm::OrderTrials {
   double measure(int order) override
   {
     options.order = order;
-    return evaluate_and_measure();
+    const double e = evaluate_and_measure();
+    if (std::getenv("KIFMM_BENCH_TRACE")) std::fprintf(stderr, "  order %d: %.3e\n", order, e);
+    return e;
   }
   void keep() override
   {

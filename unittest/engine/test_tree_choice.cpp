@@ -391,6 +391,15 @@ TEST(OrderSearch, LowersWhileTheLowerOrderMeetsTheTarget)
   u.measured.clear();
   u.restores = 0;
   EXPECT_EQ(kifmm::search_order(u, {8, 1e-7}, 1.0, 7, 9).order, 7);
+  // a tree without expansions (the same error at every order): the order is kept
+  ModelTrials d;
+  d.error_of.assign(10, 3e-16);
+  d.current = 8;
+  const kifmm::OrderFound e = kifmm::search_order(d, {8, 3e-16}, 1e-6, 3, 9);
+  EXPECT_EQ(e.order, 8);
+  EXPECT_EQ(d.measured, (std::vector<int>{7}));
+  EXPECT_EQ(d.restores, 1);
+  EXPECT_EQ(d.current, 8);
   // raised from 5 to 6, which meets 3e-5 but not by half: 6
   ModelTrials w = t;
   w.measured.clear();

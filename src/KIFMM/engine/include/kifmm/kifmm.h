@@ -209,7 +209,8 @@ struct OrderFound {
 // target, up to max_order.
 OrderFound raise_order(OrderTrials &trials, OrderFound at, double target, int max_order);
 // raise_order, then, while the error is below half the target, the order below (not below
-// min_order, not above start's), taken if its error meets the target, else the kept
+// min_order, not above start's), taken if its error meets the target and differs from the
+// current one (equal errors: no expansions on this tree, the order is kept), else the kept
 // evaluation restored: the lowest order measured to meet the target, one step at a time.
 OrderFound search_order(OrderTrials &trials, OrderFound start, double target, int min_order, int max_order);
 }    // namespace kifmm

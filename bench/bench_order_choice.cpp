@@ -27,45 +27,6 @@
 
 namespace {
 
-std::vector<std::string> split(const std::string &s)
-{
-  std::vector<std::string> v;
-  std::stringstream ss(s);
-  std::string tok;
-  while (std::getline(ss, tok, ','))
-    if (!tok.empty()) v.push_back(tok);
-  return v;
-}
-
-double rel_rms(const std::vector<double> &a, const std::vector<double> &ref)
-{
-  double num = 0, den = 0;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    num += (a[i] - ref[i]) * (a[i] - ref[i]);
-    den += ref[i] * ref[i];
-  }
-  return kifmm::relative_rms(num, den);
-}
-
-bench::Points into_cell(bench::Points p)
-{
-  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
-  for (std::size_t i = 0; i < p.size(); ++i)
-    for (int d = 0; d < 3; ++d) {
-      lo[d] = std::min(lo[d], p.xyz[3 * i + d]);
-      hi[d] = std::max(hi[d], p.xyz[3 * i + d]);
-    }
-  const double w = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-300});
-  double qsum = 0;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    for (int d = 0; d < 3; ++d)
-      p.xyz[3 * i + d] = -0.999 + 1.998 * (p.xyz[3 * i + d] - 0.5 * (lo[d] + hi[d]) + 0.5 * w) / w;
-    qsum += p.q[i];
-  }
-  for (double &q : p.q) q -= qsum / p.size();
-  return p;
-}
-
 // An evaluation at an order on a fixed tree, and its sampled error (as kspace_style kifmm
 // measures it at the first evaluation of a run)
 struct Trials : kifmm::OrderTrials {
@@ -126,7 +87,7 @@ double force_error(const bench::Points &p, const std::vector<double> &grad, cons
       a[3 * i + d] = p.q[i] * grad[3 * i + d];
       e[3 * i + d] = p.q[i] * exact[3 * i + d];
     }
-  return rel_rms(a, e);
+  return bench::relative_difference(a, e);
 }
 
 std::vector<double> gradient_at(const bench::Points &p, const kifmm::Options &o)
@@ -205,14 +166,9 @@ int main(int argc, char **argv)
   bool periodic = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    auto numbers = [&](const std::string &s) {
-      std::vector<double> v;
-      for (auto &t : split(s)) v.push_back(std::atof(t.c_str()));
-      return v;
-    };
-    if (a == "--sets" && i + 1 < argc) sets = split(argv[++i]);
-    else if (a == "--sizes" && i + 1 < argc) sizes = numbers(argv[++i]);
-    else if (a == "--requests" && i + 1 < argc) requests = numbers(argv[++i]);
+    if (a == "--sets" && i + 1 < argc) sets = bench::split_list(argv[++i]);
+    else if (a == "--sizes" && i + 1 < argc) sizes = bench::number_list(argv[++i]);
+    else if (a == "--requests" && i + 1 < argc) requests = bench::number_list(argv[++i]);
     else if (a == "--periodic") periodic = true;
     else {
       std::fprintf(stderr, "bench_order_choice: unknown option %s\n", a.c_str());
@@ -235,7 +191,7 @@ int main(int argc, char **argv)
         std::fprintf(stderr, "bench_order_choice: unknown point set %s\n", name.c_str());
         return 1;
       }
-      if (periodic) p = into_cell(p);
+      if (periodic) p = bench::into_periodic_cell(p);
       one_case(name, p, periodic, requests);
     }
   return 0;

@@ -4,7 +4,9 @@
 
 #include "kifmm_point_sets.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -78,6 +80,56 @@ inline Points read_charge_data(const std::string &path)
     p.xyz.insert(p.xyz.end(), {x, y, z});
     p.q.push_back(q);
   }
+  return p;
+}
+
+
+// The comma-separated items of a command-line value (empty items skipped), and as numbers.
+inline std::vector<std::string> split_list(const std::string &s)
+{
+  std::vector<std::string> v;
+  std::stringstream ss(s);
+  std::string tok;
+  while (std::getline(ss, tok, ','))
+    if (!tok.empty()) v.push_back(tok);
+  return v;
+}
+inline std::vector<double> number_list(const std::string &s)
+{
+  std::vector<double> v;
+  for (const std::string &t : split_list(s)) v.push_back(std::atof(t.c_str()));
+  return v;
+}
+
+// ||a - ref|| / ||ref|| over all entries
+inline double relative_difference(const std::vector<double> &a, const std::vector<double> &ref)
+{
+  double num = 0, den = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    num += (a[i] - ref[i]) * (a[i] - ref[i]);
+    den += ref[i] * ref[i];
+  }
+  return std::sqrt(num / den);
+}
+
+// The points scaled into the periodic cell [-1,1]^3 (a small margin inside), charges shifted to
+// a zero sum.
+inline Points into_periodic_cell(Points p)
+{
+  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+  for (std::size_t i = 0; i < p.size(); ++i)
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::min(lo[d], p.xyz[3 * i + d]);
+      hi[d] = std::max(hi[d], p.xyz[3 * i + d]);
+    }
+  const double w = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-300});
+  double qsum = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    for (int d = 0; d < 3; ++d)
+      p.xyz[3 * i + d] = -0.999 + 1.998 * (p.xyz[3 * i + d] - 0.5 * (lo[d] + hi[d]) + 0.5 * w) / w;
+    qsum += p.q[i];
+  }
+  for (double &q : p.q) q -= qsum / p.size();
   return p;
 }
 

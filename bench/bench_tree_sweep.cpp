@@ -31,16 +31,6 @@
 
 namespace {
 
-std::vector<std::string> split(const std::string &s)
-{
-  std::vector<std::string> v;
-  std::stringstream ss(s);
-  std::string tok;
-  while (std::getline(ss, tok, ','))
-    if (!tok.empty()) v.push_back(tok);
-  return v;
-}
-
 double cpu_now()
 {
   timespec t;
@@ -56,25 +46,6 @@ double median(std::vector<double> v)
 }
 
 // points scaled into [-1,1]^3 (a small margin inside), charges shifted to a zero sum
-bench::Points into_cell(bench::Points p)
-{
-  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
-  for (std::size_t i = 0; i < p.size(); ++i)
-    for (int d = 0; d < 3; ++d) {
-      lo[d] = std::min(lo[d], p.xyz[3 * i + d]);
-      hi[d] = std::max(hi[d], p.xyz[3 * i + d]);
-    }
-  const double w = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-300});
-  double qsum = 0;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    for (int d = 0; d < 3; ++d)
-      p.xyz[3 * i + d] = -0.999 + 1.998 * (p.xyz[3 * i + d] - 0.5 * (lo[d] + hi[d]) + 0.5 * w) / w;
-    qsum += p.q[i];
-  }
-  for (double &q : p.q) q -= qsum / p.size();
-  return p;
-}
-
 struct Candidate {
   int leaf = 0, depth = 0;
   std::vector<double> times;
@@ -175,15 +146,10 @@ int main(int argc, char **argv)
       if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
       return argv[++i];
     };
-    auto numbers = [&](const std::string &s) {
-      std::vector<double> v;
-      for (auto &t : split(s)) v.push_back(std::atof(t.c_str()));
-      return v;
-    };
-    if (a == "--sets") sets = split(next());
-    else if (a == "--sizes") sizes = numbers(next());
-    else if (a == "--orders") orders = numbers(next());
-    else if (a == "--data") files = split(next());
+    if (a == "--sets") sets = bench::split_list(next());
+    else if (a == "--sizes") sizes = bench::number_list(next());
+    else if (a == "--orders") orders = bench::number_list(next());
+    else if (a == "--data") files = bench::split_list(next());
     else if (a == "--periodic") periodic = true;
     else if (a == "--reps") reps = std::max(1, std::atoi(next().c_str()));
     else if (a == "--min-time") min_time = std::atof(next().c_str());
@@ -214,7 +180,7 @@ int main(int argc, char **argv)
   std::printf("| points | N | p | leaf auto / best | depth auto / best | s auto / best | auto/best | trees swept |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   for (auto &c : cases) {
-    if (periodic) c.pts = into_cell(c.pts);
+    if (periodic) c.pts = bench::into_periodic_cell(c.pts);
     for (double p : orders) sweep(c, (int) p, periodic, reps, min_time, factor);
   }
   return 0;

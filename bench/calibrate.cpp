@@ -276,16 +276,6 @@ std::vector<double> periodic_grad(const bench::Points &p, int order)
   return gr;
 }
 
-double rel_rms(const std::vector<double> &a, const std::vector<double> &b)
-{
-  double num = 0, den = 0;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    num += (a[i] - b[i]) * (a[i] - b[i]);
-    den += b[i] * b[i];
-  }
-  return std::sqrt(num / den);
-}
-
 int periodic_errors(int order_lo, int order_hi)
 {
   // configurations: n = 2e4, 1e5, seeds 1, 2; reference: order 14 over all targets, itself
@@ -314,7 +304,7 @@ int periodic_errors(int order_lo, int order_hi)
       const double c0[3] = {0, 0, 0};
       periodic_direct_sum(KernelSpec{}, c0, 1.0, n, c.p.xyz.data(), c.p.q.data(), ns, tx.data(), rp.data(), rg.data());
       std::fprintf(stderr, "n %zu seed %u: order-14 reference vs Ewald on %zu targets: %.2e\n", n, seed, ns,
-                   rel_rms(sg, rg));
+                   bench::relative_difference(sg, rg));
       cfg.push_back(std::move(c));
     }
   std::printf("    // order, periodic relative RMS force error over all points (max of n = 2e4, 1e5, seeds 1, 2)\n");
@@ -322,7 +312,7 @@ int periodic_errors(int order_lo, int order_hi)
     double worst = 0;
     std::string each;
     for (const Config &c : cfg) {
-      const double e = rel_rms(periodic_grad(c.p, order), c.ref);
+      const double e = bench::relative_difference(periodic_grad(c.p, order), c.ref);
       worst = std::max(worst, e);
       char b[32];
       std::snprintf(b, sizeof b, " %.2e", e);

@@ -355,29 +355,32 @@ struct ModelTrials : kifmm::OrderTrials {
     current = kept;
   }
 };
+// errors falling tenfold per order from 1e-2 at order 3; the evaluation in use at `current`
+ModelTrials tenfold(int current)
+{
+  ModelTrials t;
+  t.error_of = {1, 1, 1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8};
+  t.current = current;
+  return t;
+}
 }    // namespace
 
 TEST(OrderSearch, RaisesUntilTheTargetIsMet)
 {
-  ModelTrials t;
-  t.error_of = {1, 1, 1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8};
-  t.current = 4;
+  ModelTrials t = tenfold(4);
   const kifmm::OrderFound f = kifmm::search_order(t, {4, 1e-3}, 2e-6, 3, 9);
   EXPECT_EQ(f.order, 7);
   EXPECT_EQ(f.error, 1e-6);
   EXPECT_EQ(t.measured, (std::vector<int>{5, 6, 7}));
   EXPECT_EQ(t.restores, 0);
   // the highest order when none meets it
-  ModelTrials u = t;
-  u.measured.clear();
+  ModelTrials u = tenfold(4);
   EXPECT_EQ(kifmm::search_order(u, {4, 1e-3}, 1e-12, 3, 9).order, 9);
 }
 
 TEST(OrderSearch, LowersWhileTheLowerOrderMeetsTheTarget)
 {
-  ModelTrials t;
-  t.error_of = {1, 1, 1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8};
-  t.current = 8;
+  ModelTrials t = tenfold(8);
   // 1e-7 at order 8 is below half of 5e-5: order 7 (1e-6), 6 (1e-5) taken; at 6 the error
   // 1e-5 is below half the target, order 5 (1e-4) misses: back to 6
   const kifmm::OrderFound f = kifmm::search_order(t, {8, 1e-7}, 5e-5, 3, 9);
@@ -387,9 +390,7 @@ TEST(OrderSearch, LowersWhileTheLowerOrderMeetsTheTarget)
   EXPECT_EQ(t.restores, 1);
   EXPECT_EQ(t.current, 6);
   // not below min_order
-  ModelTrials u = t;
-  u.measured.clear();
-  u.restores = 0;
+  ModelTrials u = tenfold(8);
   EXPECT_EQ(kifmm::search_order(u, {8, 1e-7}, 1.0, 7, 9).order, 7);
   // a tree without expansions (the same error at every order): the order is kept
   ModelTrials d;
@@ -401,9 +402,7 @@ TEST(OrderSearch, LowersWhileTheLowerOrderMeetsTheTarget)
   EXPECT_EQ(d.restores, 1);
   EXPECT_EQ(d.current, 8);
   // raised from 5 to 6, which meets 3e-5 but not by half: 6
-  ModelTrials w = t;
-  w.measured.clear();
-  w.restores = 0;
+  ModelTrials w = tenfold(5);
   const kifmm::OrderFound g = kifmm::search_order(w, {5, 1e-4}, 3e-5, 3, 9);
   EXPECT_EQ(g.order, 6);
   EXPECT_EQ(w.measured, (std::vector<int>{6}));

@@ -2,9 +2,8 @@
 // The order chosen for a requested accuracy against the error it gives. For each point set and
 // request, what kspace_style kifmm does on one rank: the calibrated order (choose_order), the
 // tree (plan_tree + choose_tree_from_points), then the order measured on the points
-// (search_order: 1000 sampled targets against the direct sum, the squared error scaled to all
-// points over the squared evaluated gradients of all points, target 3/4 of the request), the
-// tree chosen again for a changed order. Reported: the calibrated and the chosen order, the
+// (bench/measured_order.h: search_order on targets sampled against the direct sum), the tree
+// chosen again for a changed order. Reported: the calibrated and the chosen order, the
 // error estimate of the search, the true relative RMS gradient error over ALL points against
 // the direct sum at the chosen order and at the order below (on the same tree), and the
 // verdicts: "meets" (true error <= request) and "tight" (the order below misses the request,
@@ -14,6 +13,7 @@
 // Potential + gradient, sources = targets; periodic: points scaled into the cell [-1,1]^3,
 // neutral charges, reference the Ewald sum on the sample and order 14 over all points.
 #include "bench_points.h"
+#include "measured_order.h"
 #include "kifmm.h"
 
 #include <algorithm>
@@ -26,57 +26,6 @@
 #include <vector>
 
 namespace {
-
-// An evaluation at an order on a fixed tree, and its sampled error (as kspace_style kifmm
-// measures it at the first evaluation of a run)
-struct Trials : kifmm::OrderTrials {
-  const kifmm::KernelSpec kernel;
-  const bench::Points &p;
-  kifmm::Options options;
-  std::vector<std::size_t> sample;
-  std::vector<double> sample_exact, grad, kept_grad;
-  kifmm::Options kept_options;
-  int evaluations = 0;
-  Trials(const bench::Points &pts, const kifmm::Options &o, std::vector<std::size_t> s, std::vector<double> exact) :
-      p(pts), options(o), sample(std::move(s)), sample_exact(std::move(exact)), grad(3 * pts.size())
-  {
-  }
-  double evaluate_and_measure()
-  {
-    const std::size_t n = p.size();
-    std::vector<double> pot(n);
-    kifmm::make_evaluator(kernel, options)->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(),
-                                                     grad.data());
-    ++evaluations;
-    double d2 = 0, r2 = 0, all2 = 0;
-    for (std::size_t k = 0; k < sample.size(); ++k)
-      for (int d = 0; d < 3; ++d) {
-        const double q = p.q[sample[k]], a = q * grad[3 * sample[k] + d], e = q * sample_exact[3 * k + d];
-        d2 += (a - e) * (a - e);
-        r2 += e * e;
-      }
-    for (std::size_t i = 0; i < n; ++i)
-      for (int d = 0; d < 3; ++d) all2 += p.q[i] * p.q[i] * grad[3 * i + d] * grad[3 * i + d];
-    return kifmm::sampled_relative_error(d2, r2, (double) sample.size(), (double) n, all2);
-  }
-  double measure(int order) override
-  {
-    options.order = order;
-    const double e = evaluate_and_measure();
-    if (std::getenv("KIFMM_BENCH_TRACE")) std::fprintf(stderr, "  order %d: %.3e\n", order, e);
-    return e;
-  }
-  void keep() override
-  {
-    kept_options = options;
-    kept_grad = grad;
-  }
-  void restore() override
-  {
-    options = kept_options;
-    grad = kept_grad;
-  }
-};
 
 // relative RMS force error over all points (force_i = q_i grad_i) against the exact gradients
 double force_error(const bench::Points &p, const std::vector<double> &grad, const std::vector<double> &exact)
@@ -121,38 +70,24 @@ void one_case(const std::string &name, const bench::Points &p, bool periodic, co
   }
   std::vector<std::size_t> all(n);
   std::iota(all.begin(), all.end(), 0);
-  const std::vector<std::size_t> sample = kifmm::sample_without_replacement(all, 1000, 1234567ULL);
+  const std::vector<std::size_t> sample = kifmm::sample_without_replacement(all, kifmm::order_search_samples, 1234567ULL);
   std::vector<double> sample_exact(3 * sample.size());
   for (std::size_t k = 0; k < sample.size(); ++k)
     for (int d = 0; d < 3; ++d) sample_exact[3 * k + d] = exact[3 * sample[k] + d];
-  const kifmm::TreeRequest request{n, 0, periodic ? -1 : 0, false};
   for (double acc : requests) {
-    const int calibrated = kifmm::choose_order(kernel, acc, periodic).order;
-    kifmm::Options o = base;
-    o.order = calibrated;
-    o = kifmm::plan_tree(o, request).options;
-    kifmm::choose_tree_from_points(kernel, request, o, n, p.xyz.data());
-    Trials t(p, o, sample, sample_exact);
-    const double target = 0.75 * acc;
-    const int max_order = kifmm::max_calibrated_order();
-    kifmm::OrderFound f = kifmm::search_order(t, {calibrated, t.evaluate_and_measure()}, target, 3, max_order);
-    if (f.order != calibrated) {    // the tree for the new order, measured again
-      const int leaf = t.options.leaf_size, grid = t.options.periodic_grid;
-      kifmm::choose_tree_from_points(kernel, request, t.options, n, p.xyz.data());
-      if (t.options.leaf_size != leaf || t.options.periodic_grid != grid)
-        f = kifmm::raise_order(t, {f.order, t.evaluate_and_measure()}, target, max_order);
-    }
-    const double err = force_error(p, t.grad, exact);
+    const bench::MeasuredOrder m =
+        bench::measured_order(kernel, base, acc, n, p.xyz.data(), p.q.data(), sample, sample_exact);
+    const double err = force_error(p, m.grad, exact);
     double below = -1;
-    if (f.order > 3) {
-      kifmm::Options lower = t.options;
-      lower.order = f.order - 1;
+    if (m.found.order > 3) {
+      kifmm::Options lower = m.options;
+      lower.order = m.found.order - 1;
       below = force_error(p, gradient_at(p, lower), exact);
     }
     const bool meets = err <= acc;
     const bool tight = below < 0 || below > acc || err * 5 >= acc;
-    std::printf("| %s | %zu | %.0e | %d | %d | %.2e | %.2e | %.2e | %s | %s | %d |\n", name.c_str(), n, acc, calibrated,
-                f.order, f.error, err, below, meets ? "yes" : "**no**", tight ? "yes" : "**no**", t.evaluations);
+    std::printf("| %s | %zu | %.0e | %d | %d | %.2e | %.2e | %.2e | %s | %s | %d |\n", name.c_str(), n, acc, m.calibrated,
+                m.found.order, m.found.error, err, below, meets ? "yes" : "**no**", tight ? "yes" : "**no**", m.evaluations);
     std::fflush(stdout);
   }
 }

@@ -82,8 +82,8 @@ class KSpaceKIFMM : public KSpace {
   void check_error();
   // order from the accuracy: at the first evaluation of a run the error is measured on the
   // atoms and the order raised until the request is met, or lowered while it is still met
-  static constexpr int verify_samples = 1000;
-  static constexpr double verify_margin = 0.75;    // sampled error wanted: 3/4 of the request
+  static constexpr int verify_samples = kifmm::order_search_samples;
+  static constexpr double verify_margin = kifmm::order_search_margin;    // sampled error wanted: 3/4 of the request
   bool verify_pending = false;
   double verified_error = -1.0;
   int chosen_order = 0;    // order the last measurement settled on (0: none), kept across runs

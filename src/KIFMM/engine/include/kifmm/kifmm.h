@@ -191,6 +191,12 @@ TreeChoice choose_tree_from_points(const KernelSpec &kernel, const TreeRequest &
 
 // ---- the order for a requested accuracy, measured on the points (order_search.cpp)
 
+// The measurement kspace_style kifmm makes at the start of a run: the relative error sampled
+// on this many targets against their exact values (sampled_relative_error), wanted at this
+// fraction of the requested accuracy.
+constexpr int order_search_samples = 1000;
+constexpr double order_search_margin = 0.75;
+
 // The caller's side of an order search: evaluate at an order (its current tree and points) and
 // return the measured relative error there (< 0: not measured); keep the current evaluation
 // before a lower order is tried, and return to the kept one.

@@ -1,0 +1,104 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
+// The order for a requested accuracy as kspace_style kifmm finds it at the start of a run on one
+// rank, for the benchmark programs: the calibrated order (kifmm::choose_order) on the tree
+// chosen for it (plan_tree + choose_tree_from_points), then kifmm::search_order with the sampled
+// error (kifmm::order_search_samples targets against their exact gradients, the squared error
+// scaled to all points over the squared evaluated gradients of all points, wanted at
+// kifmm::order_search_margin of the request), and the tree chosen again for a changed order,
+// raised again if that tree misses. Sources = targets = xyz, potential and gradient.
+#pragma once
+
+#include "kifmm.h"
+
+#include <cstdio>
+#include <cstdlib>
+#include <utility>
+#include <vector>
+
+namespace bench {
+
+// An evaluation at an order on a fixed tree, and its sampled error
+struct SampledOrderTrials : kifmm::OrderTrials {
+  const kifmm::KernelSpec kernel;
+  std::size_t n;
+  const double *xyz, *q;
+  kifmm::Options options;
+  std::vector<std::size_t> sample;
+  std::vector<double> sample_exact, grad, kept_grad;
+  kifmm::Options kept_options;
+  int evaluations = 0;
+  SampledOrderTrials(const kifmm::KernelSpec &k, std::size_t n_points, const double *points, const double *charges,
+                     const kifmm::Options &o, std::vector<std::size_t> s, std::vector<double> exact) :
+      kernel(k), n(n_points), xyz(points), q(charges), options(o), sample(std::move(s)),
+      sample_exact(std::move(exact)), grad(3 * n_points)
+  {
+  }
+  double evaluate_and_measure()
+  {
+    std::vector<double> pot(n);
+    kifmm::make_evaluator(kernel, options)->evaluate(n, xyz, q, n, xyz, pot.data(), grad.data());
+    ++evaluations;
+    double d2 = 0, r2 = 0, all2 = 0;
+    for (std::size_t k = 0; k < sample.size(); ++k)
+      for (int d = 0; d < 3; ++d) {
+        const double qi = q[sample[k]], a = qi * grad[3 * sample[k] + d], e = qi * sample_exact[3 * k + d];
+        d2 += (a - e) * (a - e);
+        r2 += e * e;
+      }
+    for (std::size_t i = 0; i < n; ++i)
+      for (int d = 0; d < 3; ++d) all2 += q[i] * q[i] * grad[3 * i + d] * grad[3 * i + d];
+    return kifmm::sampled_relative_error(d2, r2, (double) sample.size(), (double) n, all2);
+  }
+  double measure(int order) override
+  {
+    options.order = order;
+    const double e = evaluate_and_measure();
+    if (std::getenv("KIFMM_BENCH_TRACE")) std::fprintf(stderr, "  order %d: %.3e\n", order, e);
+    return e;
+  }
+  void keep() override
+  {
+    kept_options = options;
+    kept_grad = grad;
+  }
+  void restore() override
+  {
+    options = kept_options;
+    grad = kept_grad;
+  }
+};
+
+struct MeasuredOrder {
+  int calibrated;           // the order of the calibration table
+  kifmm::Options options;   // order and tree chosen
+  kifmm::OrderFound found;  // the order and its sampled error
+  std::vector<double> grad; // gradients of all points at the chosen options
+  int evaluations;          // evaluations of the search
+};
+
+// base: boundary and root (periodic, fixed_root, root_half_width); sample_exact: the exact
+// gradients (3 per sampled target, in the order of sample)
+inline MeasuredOrder measured_order(const kifmm::KernelSpec &kernel, const kifmm::Options &base, double request,
+                                    std::size_t n, const double *xyz, const double *q,
+                                    const std::vector<std::size_t> &sample, const std::vector<double> &sample_exact)
+{
+  const kifmm::TreeRequest tree{n, 0, base.periodic ? -1 : 0, false};
+  const int calibrated = kifmm::choose_order(kernel, request, base.periodic).order;
+  kifmm::Options o = base;
+  o.order = calibrated;
+  o = kifmm::plan_tree(o, tree).options;
+  kifmm::choose_tree_from_points(kernel, tree, o, n, xyz);
+  SampledOrderTrials t(kernel, n, xyz, q, o, sample, sample_exact);
+  const double target = kifmm::order_search_margin * request;
+  const int max_order = kifmm::max_calibrated_order();
+  kifmm::OrderFound f = kifmm::search_order(t, {calibrated, t.evaluate_and_measure()}, target, 3, max_order);
+  if (f.order != calibrated) {    // the tree for the new order, measured again
+    const int leaf = t.options.leaf_size, grid = t.options.periodic_grid;
+    kifmm::choose_tree_from_points(kernel, tree, t.options, n, xyz);
+    if (t.options.leaf_size != leaf || t.options.periodic_grid != grid)
+      f = kifmm::raise_order(t, {f.order, t.evaluate_and_measure()}, target, max_order);
+  }
+  return MeasuredOrder{calibrated, t.options, f, t.grad, t.evaluations};
+}
+
+}    // namespace bench

@@ -14,6 +14,7 @@
 #include "kifmm.h"
 #include "../measured_order.h"
 
+#include <algorithm>
 #include <numeric>
 
 int main(int argc, char **argv)

@@ -4,8 +4,9 @@
 // chosen for it (plan_tree + choose_tree_from_points), then kifmm::search_order with the sampled
 // error (kifmm::order_search_samples targets against their exact gradients, the squared error
 // scaled to all points over the squared evaluated gradients of all points, wanted at
-// kifmm::order_search_margin of the request), and the tree chosen again for a changed order,
-// raised again if that tree misses. Sources = targets = xyz, potential and gradient.
+// kifmm::order_search_margin of the request; of two orders the lower one's error bounded by
+// their difference over all points plus the higher one's error), each order on the tree chosen
+// for it. Sources = targets = xyz, potential and gradient.
 #pragma once
 
 #include "kifmm.h"
@@ -27,11 +28,20 @@ struct SampledOrderTrials : kifmm::OrderTrials {
   std::vector<double> sample_exact, grad, kept_grad;
   kifmm::Options kept_options;
   int evaluations = 0;
+  kifmm::TreeRequest tree;    // the tree of each order: chosen for it from the points
   SampledOrderTrials(const kifmm::KernelSpec &k, std::size_t n_points, const double *points, const double *charges,
-                     const kifmm::Options &o, std::vector<std::size_t> s, std::vector<double> exact) :
+                     const kifmm::Options &o, const kifmm::TreeRequest &r, std::vector<std::size_t> s,
+                     std::vector<double> exact) :
       kernel(k), n(n_points), xyz(points), q(charges), options(o), sample(std::move(s)),
-      sample_exact(std::move(exact)), grad(3 * n_points)
+      sample_exact(std::move(exact)), grad(3 * n_points), tree(r)
   {
+  }
+  // the options of an order: its tree planned and chosen from the points
+  void choose(int order)
+  {
+    options.order = order;
+    options = kifmm::plan_tree(options, tree).options;
+    kifmm::choose_tree_from_points(kernel, tree, options, n, xyz);
   }
   double evaluate_and_measure()
   {
@@ -51,15 +61,30 @@ struct SampledOrderTrials : kifmm::OrderTrials {
   }
   double measure(int order) override
   {
-    options.order = order;
+    choose(order);
     const double e = evaluate_and_measure();
-    if (std::getenv("KIFMM_BENCH_TRACE")) std::fprintf(stderr, "  order %d: %.3e\n", order, e);
+    if (std::getenv("KIFMM_BENCH_TRACE"))
+      std::fprintf(stderr, "  order %d (leaf %d): sampled %.3e\n", order, options.leaf_size, e);
     return e;
   }
   void keep() override
   {
     kept_options = options;
     kept_grad = grad;
+  }
+  double difference_from_kept() override
+  {
+    double d2 = 0, all2 = 0;
+    for (std::size_t i = 0; i < n; ++i)
+      for (int d = 0; d < 3; ++d) {
+        const double a = q[i] * grad[3 * i + d], b = q[i] * kept_grad[3 * i + d];
+        d2 += (a - b) * (a - b);
+        all2 += a * a;
+      }
+    const double diff = kifmm::relative_rms(d2, all2);
+    if (std::getenv("KIFMM_BENCH_TRACE"))
+      std::fprintf(stderr, "  orders %d and %d differ by %.3e\n", kept_options.order, options.order, diff);
+    return diff;
   }
   void restore() override
   {
@@ -71,7 +96,7 @@ struct SampledOrderTrials : kifmm::OrderTrials {
 struct MeasuredOrder {
   int calibrated;           // the order of the calibration table
   kifmm::Options options;   // order and tree chosen
-  kifmm::OrderFound found;  // the order and its sampled error
+  kifmm::OrderFound found;  // the order and its error estimate (sampled, or the bound)
   std::vector<double> grad; // gradients of all points at the chosen options
   int evaluations;          // evaluations of the search
 };
@@ -84,20 +109,13 @@ inline MeasuredOrder measured_order(const kifmm::KernelSpec &kernel, const kifmm
 {
   const kifmm::TreeRequest tree{n, 0, base.periodic ? -1 : 0, false};
   const int calibrated = kifmm::choose_order(kernel, request, base.periodic).order;
-  kifmm::Options o = base;
-  o.order = calibrated;
-  o = kifmm::plan_tree(o, tree).options;
-  kifmm::choose_tree_from_points(kernel, tree, o, n, xyz);
-  SampledOrderTrials t(kernel, n, xyz, q, o, sample, sample_exact);
-  const double target = kifmm::order_search_margin * request;
-  const int max_order = kifmm::max_calibrated_order();
-  kifmm::OrderFound f = kifmm::search_order(t, {calibrated, t.evaluate_and_measure()}, target, 3, max_order);
-  if (f.order != calibrated) {    // the tree for the new order, measured again
-    const int leaf = t.options.leaf_size, grid = t.options.periodic_grid;
-    kifmm::choose_tree_from_points(kernel, tree, t.options, n, xyz);
-    if (t.options.leaf_size != leaf || t.options.periodic_grid != grid)
-      f = kifmm::raise_order(t, {f.order, t.evaluate_and_measure()}, target, max_order);
-  }
+  SampledOrderTrials t(kernel, n, xyz, q, base, tree, sample, sample_exact);
+  t.choose(calibrated);
+  const double first = t.evaluate_and_measure();
+  if (std::getenv("KIFMM_BENCH_TRACE"))
+    std::fprintf(stderr, "  order %d (leaf %d): sampled %.3e\n", calibrated, t.options.leaf_size, first);
+  const kifmm::OrderFound f =
+      kifmm::search_order(t, {calibrated, first}, request, 3, kifmm::max_calibrated_order());
   return MeasuredOrder{calibrated, t.options, f, t.grad, t.evaluations};
 }
 

@@ -187,11 +187,13 @@ void KSpaceKIFMM::check_error()
 }
 
 // First evaluation of a run whose order comes from the requested accuracy: the error measured
-// on these atoms (free atoms' forces, clumps' net forces and torques). While it exceeds the
-// target (3/4 of the request: the sampled error is an estimate), the next order is evaluated;
-// while it is below half the target, the order below is tried and kept if it meets the target.
-// The order settled on is where the next run of these settings starts. Above the calibrated
-// orders a warning gives the error that can be reached.
+// on these atoms (free atoms' forces, clumps' net forces and torques), kifmm::search_order. While
+// it exceeds the target (3/4 of the request: the sampled error is an estimate), the next order
+// is evaluated; while it is below half the target, the order below is tried. Without clumps, of
+// two orders the lower one's error is bounded by their difference over all atoms plus the
+// higher one's sampled error, compared with the request itself. Each order is evaluated on the
+// tree chosen for it. The order settled on is where the next run of these settings starts.
+// Above the calibrated orders a warning gives the error that can be reached.
 void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::size_t &nsrc)
 {
   verify_pending = false;
@@ -199,11 +201,10 @@ void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::s
   MPI_Allreduce(&nmine, &ntotal, 1, MPI_LMP_BIGINT, MPI_SUM, world);
   if (ntotal < 2) return;
   const int nsamples = kset.check_samples > 0 ? kset.check_samples : verify_samples;
-  const double target = verify_margin * kset.accuracy;
   const int first_order = engine_options.order;
   const kifmm::KernelSpec kernel = engine->kernel();
-  // the evaluations of the search (kifmm::search_order): another order on the current tree and
-  // root, measured on these atoms; each step is logged
+  // the evaluations of the search (kifmm::search_order): another order on the tree chosen for
+  // it, measured on these atoms; each step is logged
   struct Trials : kifmm::OrderTrials {
     KSpaceKIFMM &ks;
     const kifmm::KernelSpec kernel;
@@ -230,9 +231,13 @@ void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::s
       const double was = m.worst();
       kifmm::Options opt = ks.engine ? ks.engine->options() : kept.options;
       opt.order = order;
+      // the tree for that order (leaf not given; one rank: from the atoms, several: the uniform
+      // choice, as the next run of these settings starts with)
+      if (ks.kset.leaf <= 0) opt = kifmm::plan_tree(opt, ks.tree_request).options;
       ks.engine = kifmm::make_evaluator(kernel, opt);
       ks.engine_options = ks.engine->options();
       ks.reported_first_evaluation = false;
+      if (ks.kset.leaf <= 0 && !ks.distributed()) ks.choose_tree_from_atoms();
       ks.evaluate_points(want_potential, comm_time, nsrc);
       m = ks.measure_error(nsamples);
       if (ks.comm->me != 0) return m.worst();
@@ -244,10 +249,8 @@ void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::s
       else
         utils::logmesg(ks.lmp,
                        "  KIFMM order {} measured {:.3e} on these atoms <= {:.3g} (half the target): "
-                       "order {} measured {:.3e}: {}\n",
-                       from, was, 0.5 * target, order, m.worst(),
-                       m.worst() >= 0 && m.worst() <= target ? std::string("taken")
-                                                            : fmt::format("order {} kept", from));
+                       "order {} measured {:.3e}\n",
+                       from, was, 0.5 * target, order, m.worst());
       return m.worst();
     }
     void keep() override
@@ -258,6 +261,25 @@ void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::s
       kept.pot = ks.pot;
       kept.m = m;
     }
+    // the free atoms' forces over all of them (none in clumps: their net forces and torques
+    // are measured on the sample only)
+    double difference_from_kept() override
+    {
+      if (!ks.point_body.empty()) return -1;
+      double mine[2] = {0, 0}, all[2];
+      for (std::size_t k = 0; k < ks.index.size(); ++k)
+        for (int d = 0; d < 3; ++d) {
+          const double s = ks.strength[k], a = s * ks.grad[3 * k + d], b = s * kept.grad[3 * k + d];
+          mine[0] += (a - b) * (a - b);
+          mine[1] += a * a;
+        }
+      MPI_Allreduce(mine, all, 2, MPI_DOUBLE, MPI_SUM, ks.world);
+      const double d = kifmm::relative_rms(all[0], all[1]);
+      if (ks.comm->me == 0)
+        utils::logmesg(ks.lmp, "  KIFMM orders {} and {} differ by {:.3e} over all atoms\n", kept.options.order,
+                       ks.engine_options.order, d);
+      return d;
+    }
     void restore() override
     {
       ks.engine = std::move(kept.engine);
@@ -266,39 +288,26 @@ void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::s
       ks.pot = kept.pot;
       m = kept.m;
     }
-  } trials(*this, want_potential, comm_time, nsrc, nsamples, target);
+  } trials(*this, want_potential, comm_time, nsrc, nsamples, verify_margin * kset.accuracy);
   const int max_order = kifmm::max_calibrated_order();
-  kifmm::search_order(trials, kifmm::OrderFound{first_order, trials.m.worst()}, target, min_tried_order, max_order);
-  // another order than the run started with: the tree for that order (leaf not given; one
-  // rank: from the atoms, several: the uniform choice, as the next run of these settings starts
-  // with), measured too; raised again if that tree does not meet the target
-  if (engine_options.order != first_order && kset.leaf <= 0) {
-    const int leaf = engine_options.leaf_size, grid = engine_options.periodic_grid;
-    if (distributed()) {
-      const kifmm::Options planned = kifmm::plan_tree(engine->options(), tree_request).options;
-      if (planned.leaf_size != leaf || planned.periodic_grid != grid) {
-        engine = kifmm::make_evaluator(kernel, planned);
-        engine_options = engine->options();
-        reported_first_evaluation = false;
-      }
-    } else {
-      choose_tree_from_atoms();
-    }
-    if (engine_options.leaf_size != leaf || engine_options.periodic_grid != grid) {
-      evaluate_points(want_potential, comm_time, nsrc);
-      trials.m = measure_error(nsamples);
-      kifmm::raise_order(trials, kifmm::OrderFound{engine_options.order, trials.m.worst()}, target, max_order);
-    }
-  }
+  const kifmm::OrderFound found = kifmm::search_order(trials, kifmm::OrderFound{first_order, trials.m.worst()},
+                                                      kset.accuracy, min_tried_order, max_order);
   const MeasuredError &m = trials.m;
-  verified_error = m.worst();
+  // the error of the order settled on: the sampled one, or the bound from the difference to
+  // the next order over all atoms when that decided
+  verified_error = found.order == engine_options.order && found.error >= 0 ? found.error : m.worst();
   chosen_order = engine_options.order;
   if (comm->me == 0) {
-    if (m.worst() > kset.accuracy)
+    if (verified_error > kset.accuracy)
       error->warning(FLERR,
                      "kspace_style kifmm: the requested accuracy {:.3g} is out of reach for these "
                      "atoms: measured {:.3e} at order {}, the highest calibrated order ({})",
-                     kset.accuracy, m.worst(), engine_options.order, m.describe());
+                     kset.accuracy, verified_error, engine_options.order, m.describe());
+    else if (verified_error != m.worst())
+      utils::logmesg(lmp,
+                     "  KIFMM order {}: relative error at most {:.3e} (its difference to the next order over all "
+                     "atoms plus that order's sampled error; sampled at order {}: {}), requested {:.3g}\n",
+                     engine_options.order, verified_error, engine_options.order, m.describe(), kset.accuracy);
     else
       utils::logmesg(lmp, "  KIFMM order {}: measured relative error {:.3e} ({}), requested {:.3g}\n",
                      engine_options.order, m.worst(), m.describe(), kset.accuracy);

@@ -339,9 +339,15 @@ TEST(TreePlan, ChoiceFromPointsSetsTheOptions)
 // search_order: the policy of the measured order on a model of the error per order
 namespace {
 struct ModelTrials : kifmm::OrderTrials {
-  std::vector<double> error_of;    // index = order
+  std::vector<double> error_of;    // index = order: the sampled error
+  std::vector<double> true_of;     // the true error (empty: no difference available)
   std::vector<int> measured;
   int current = 0, kept = -1, restores = 0;
+  // the model's difference of two evaluations: their true errors apart (errors of one sign)
+  double difference_from_kept() override
+  {
+    return true_of.empty() ? -1.0 : std::fabs(true_of.at(current) - true_of.at(kept));
+  }
   double measure(int order) override
   {
     measured.push_back(order);
@@ -406,4 +412,43 @@ TEST(OrderSearch, LowersWhileTheLowerOrderMeetsTheTarget)
   const kifmm::OrderFound g = kifmm::search_order(w, {5, 1e-4}, 3e-5, 3, 9);
   EXPECT_EQ(g.order, 6);
   EXPECT_EQ(w.measured, (std::vector<int>{6}));
+}
+
+TEST(OrderSearch, TheDifferenceOverAllPointsDecidesWhenAvailable)
+{
+  // request 1e-5 (sampled errors wanted below 3/4 of it). Order 6: sampled 9e-6, true 8.3e-6;
+  // order 7: sampled 6e-7 (true 5e-7). The bound of order 6 from the difference over all points,
+  // 7.8e-6 + 6e-7 = 8.4e-6, meets the request (the margin is for sampled errors): order 6 kept
+  // (its evaluation restored), its error the bound
+  ModelTrials t = tenfold(6);
+  t.error_of[6] = 9e-6;
+  t.error_of[7] = 6e-7;
+  t.true_of = {1, 1, 1, 1e-2, 1e-3, 1e-4, 8.3e-6, 5e-7, 5e-8, 5e-9};
+  const kifmm::OrderFound f = kifmm::search_order(t, {6, 9e-6}, 1e-5, 3, 9);
+  EXPECT_EQ(f.order, 6);
+  EXPECT_NEAR(f.error, 8.4e-6, 1e-12);
+  EXPECT_EQ(t.measured, (std::vector<int>{7}));
+  EXPECT_EQ(t.restores, 1);
+  EXPECT_EQ(t.current, 6);
+  // without the difference the sample decides: order 7
+  ModelTrials s = t;
+  s.true_of.clear();
+  s.measured.clear();
+  s.current = 6;
+  EXPECT_EQ(kifmm::search_order(s, {6, 9e-6}, 1e-5, 3, 9).order, 7);
+  // lowering: at order 8 (sampled 1e-7), order 7 sampled 9e-6 (over 3/4 of the request) but its
+  // bound 3e-6 + 1e-7 meets it: taken; order 6's bound 4e-5 + 3e-6 misses: back to 7
+  ModelTrials u = tenfold(8);
+  u.error_of[7] = 9e-6;
+  u.true_of = {1, 1, 1, 1e-2, 1e-3, 1e-4, 4e-5, 3e-6, 0.0, 0.0};
+  const kifmm::OrderFound g = kifmm::search_order(u, {8, 1e-7}, 1e-5, 3, 9);
+  EXPECT_EQ(g.order, 7);
+  EXPECT_NEAR(g.error, 3e-6 + 1e-7, 1e-12);
+  EXPECT_EQ(u.measured, (std::vector<int>{7, 6}));
+  EXPECT_EQ(u.current, 7);
+  // a bound that misses while the sample meets: the bound decides (order 7 not taken)
+  ModelTrials w = tenfold(8);
+  w.true_of = {1, 1, 1, 1e-2, 1e-3, 1e-4, 1e-4, 1.2e-5, 0.0, 0.0};
+  EXPECT_EQ(kifmm::search_order(w, {8, 1e-7}, 1e-5, 3, 9).order, 8);
+  EXPECT_EQ(w.current, 8);
 }

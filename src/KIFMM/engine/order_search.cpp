@@ -7,28 +7,48 @@
 
 namespace kifmm {
 
-OrderFound raise_order(OrderTrials &trials, OrderFound at, double target, int max_order)
+namespace {
+// the error of the lower of two orders: the difference over all points plus the higher order's
+// error (triangle inequality); < 0 when either is unknown
+double lower_order_bound(double difference, double higher_error)
 {
+  return difference >= 0 && higher_error >= 0 ? difference + higher_error : -1.0;
+}
+}    // namespace
+
+OrderFound raise_order(OrderTrials &trials, OrderFound at, double request, int max_order)
+{
+  const double target = order_search_margin * request;
   while (at.error > target && at.order < max_order) {
-    const int next = at.order + 1;
-    at = OrderFound{next, trials.measure(next)};
+    trials.keep();
+    const OrderFound next{at.order + 1, trials.measure(at.order + 1)};
+    // the sampled error of `at` may overestimate it: the bound over all points decides
+    const double bound = lower_order_bound(trials.difference_from_kept(), next.error);
+    if (bound >= 0 && bound <= request) {
+      trials.restore();
+      return OrderFound{at.order, bound};
+    }
+    at = next;
   }
   return at;
 }
 
-OrderFound search_order(OrderTrials &trials, OrderFound start, double target, int min_order, int max_order)
+OrderFound search_order(OrderTrials &trials, OrderFound start, double request, int min_order, int max_order)
 {
-  OrderFound at = raise_order(trials, start, target, max_order);
-  // a lower order may meet the target too (calibrated errors are upper bounds for most point
-  // sets): tried while the error is below half the target, taken if it meets the target and
+  const double target = order_search_margin * request;
+  OrderFound at = raise_order(trials, start, request, max_order);
+  // a lower order may meet the request too (calibrated errors are upper bounds for most point
+  // sets): tried while the error is below half the target, taken if it meets the request and
   // differs from the current one (an equal error means the tree has no expansions the order
   // acts on, e.g. a direct sum over few leaves: the order says nothing there, it is kept)
   while (at.order <= start.order && at.order > min_order && at.error >= 0 && at.error <= 0.5 * target) {
     trials.keep();
     const OrderFound lower{at.order - 1, trials.measure(at.order - 1)};
     const bool same = std::fabs(lower.error - at.error) <= 1e-6 * at.error;
-    if (lower.error >= 0 && lower.error <= target && !same) {
-      at = lower;
+    const double bound = lower_order_bound(trials.difference_from_kept(), at.error);
+    const bool meets = bound >= 0 ? bound <= request : lower.error >= 0 && lower.error <= target;
+    if (meets && !same) {
+      at = OrderFound{lower.order, bound >= 0 ? bound : lower.error};
       continue;
     }
     trials.restore();

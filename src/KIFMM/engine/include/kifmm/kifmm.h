@@ -199,26 +199,36 @@ constexpr double order_search_margin = 0.75;
 
 // The caller's side of an order search: evaluate at an order (its current tree and points) and
 // return the measured relative error there (< 0: not measured); keep the current evaluation
-// before a lower order is tried, and return to the kept one.
+// before another order is tried, and return to the kept one. difference_from_kept: the relative
+// RMS difference over ALL points between the current evaluation and the kept one, normalized as
+// the measured error (< 0: not available). Of two orders, the lower one's error is at most that
+// difference plus the higher one's error: a bound whose large term has no sampling noise.
 class OrderTrials {
  public:
   virtual ~OrderTrials() = default;
   virtual double measure(int order) = 0;
   virtual void keep() = 0;
   virtual void restore() = 0;
+  virtual double difference_from_kept() { return -1; }
 };
 struct OrderFound {
   int order;
   double error;    // measured at that order
 };
-// From `at` (an order and its measured error): the next order while the error exceeds the
-// target, up to max_order.
-OrderFound raise_order(OrderTrials &trials, OrderFound at, double target, int max_order);
-// raise_order, then, while the error is below half the target, the order below (not below
-// min_order, not above start's), taken if its error meets the target and differs from the
-// current one (equal errors: no expansions on this tree, the order is kept), else the kept
-// evaluation restored: the lowest order measured to meet the target, one step at a time.
-OrderFound search_order(OrderTrials &trials, OrderFound start, double target, int min_order, int max_order);
+// From `at` (an order and its measured error): the next order while the error exceeds
+// order_search_margin * request (the sampled error is an estimate), up to max_order. When the
+// difference to the next order is available and the bound from it (difference + next order's
+// error) meets the request, the order is kept after all (its evaluation restored) with that
+// bound as its error.
+OrderFound raise_order(OrderTrials &trials, OrderFound at, double request, int max_order);
+// raise_order, then, while the error is below half of order_search_margin * request, the order
+// below (not below min_order, not above start's), taken if it meets the request (the bound from
+// the difference when available, else its measured error below the margin) and its error
+// differs from the current one (equal errors: no expansions on this tree, the order is kept),
+// else the kept evaluation restored: the lowest order found to meet the request, one step at a
+// time. Each trial is the caller's evaluation at that order: on the tree the caller chooses for
+// it.
+OrderFound search_order(OrderTrials &trials, OrderFound start, double request, int min_order, int max_order);
 }    // namespace kifmm
 
 namespace kifmm {

@@ -33,6 +33,7 @@ class KSpaceKIFMM : public KSpace {
   // last measured relative RMS force error of `check` (negative when never measured)
   double measured_error() const { return last_measured_error; }
   const kifmm::Stats &engine_stats() const;
+  int engine_order() const { return engine_options.order; }    // the order in use
   // time by phase since the setup of the current run (printed at its end)
   const KIFMMTiming &timing() const { return run_timing; }
 

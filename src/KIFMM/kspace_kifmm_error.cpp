@@ -265,7 +265,9 @@ void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::s
     // are measured on the sample only)
     double difference_from_kept() override
     {
-      if (!ks.point_body.empty()) return -1;
+      int mine_bodies = ks.point_body.empty() ? 0 : 1, any_bodies = 0;
+      MPI_Allreduce(&mine_bodies, &any_bodies, 1, MPI_INT, MPI_MAX, ks.world);
+      if (any_bodies) return -1;
       double mine[2] = {0, 0}, all[2];
       for (std::size_t k = 0; k < ks.index.size(); ++k)
         for (int d = 0; d < 3; ++d) {
@@ -298,6 +300,10 @@ void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::s
   verified_error = found.order == engine_options.order && found.error >= 0 ? found.error : m.worst();
   chosen_order = engine_options.order;
   if (comm->me == 0) {
+    const kifmm::Options &o = engine_options;
+    const std::string tree = o.periodic_grid > 0
+        ? fmt::format("periodic single-level grid of {}^3 cells", o.periodic_grid)
+        : fmt::format("leaf size {}, tree depth {}", o.leaf_size, engine->stats().depth);
     if (verified_error > kset.accuracy)
       error->warning(FLERR,
                      "kspace_style kifmm: the requested accuracy {:.3g} is out of reach for these "
@@ -305,11 +311,11 @@ void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::s
                      kset.accuracy, verified_error, engine_options.order, m.describe());
     else if (verified_error != m.worst())
       utils::logmesg(lmp,
-                     "  KIFMM order {}: relative error at most {:.3e} (its difference to the next order over all "
-                     "atoms plus that order's sampled error; sampled at order {}: {}), requested {:.3g}\n",
-                     engine_options.order, verified_error, engine_options.order, m.describe(), kset.accuracy);
+                     "  KIFMM order {} on {}: relative error at most {:.3e} (its difference to the next order "
+                     "over all atoms plus that order's sampled error; sampled at order {}: {}), requested {:.3g}\n",
+                     engine_options.order, tree, verified_error, engine_options.order, m.describe(), kset.accuracy);
     else
-      utils::logmesg(lmp, "  KIFMM order {}: measured relative error {:.3e} ({}), requested {:.3g}\n",
-                     engine_options.order, m.worst(), m.describe(), kset.accuracy);
+      utils::logmesg(lmp, "  KIFMM order {} on {}: measured relative error {:.3e} ({}), requested {:.3g}\n",
+                     engine_options.order, tree, m.worst(), m.describe(), kset.accuracy);
   }
 }

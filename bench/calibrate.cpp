@@ -18,7 +18,8 @@
 // the actual trees (actual_tree_counts, cost_model.h).
 // Prints the table rows (ns) on stdout, the measured and fitted times on stderr.
 // `--only-n N` measures only the point sets of that size (to add them to a log for --refit).
-// `calibrate --refit COST.err` fits again from those measured times (stderr of --cost), with
+// `calibrate --refit COST.err [--shared-entry]` fits again from those measured times (stderr of
+// --cost; --shared-entry: one entry constant for all orders, the per-pair task overhead), with
 // the counts of the trees computed anew (a changed model, no new measurements).
 //
 // `calibrate --grid-cost [--orders 3-10] [--reps 3]` regenerates kGridCost (calibration.cpp): the
@@ -119,12 +120,15 @@ CostRowValues cost_columns(const CostSet &set, const Options &o)
 // columns scaled to O(1)) by enumeration: the best fit over the subsets of the columns whose
 // solution has no negative constant (translation and cell terms are nearly collinear). Prints
 // the table row on stdout, measured and fitted times on stderr.
-void fit_cost_row(int order, const std::vector<CostRowValues> &rows, const std::vector<double> &times,
-                  const std::vector<std::string> &labels)
+// entry < 0: the entry constant is fitted per order; else it is that (seconds), the same for
+// every order (the per-pair task overhead of the near field does not depend on the order). quiet:
+// only the sum of squared relative residuals is returned.
+double fit_cost_row(int order, const std::vector<CostRowValues> &rows, const std::vector<double> &times,
+                    const std::vector<std::string> &labels, double entry = -1, bool quiet = false)
 {
   constexpr int K = kCostColumns;
   const int ne = (int) rows.size();
-  if (ne == 0) return;
+  if (ne == 0) return 0;
   Eigen::MatrixXd A(ne, K);
   Eigen::VectorXd b(ne);
   double colscale[K] = {};
@@ -134,11 +138,12 @@ void fit_cost_row(int order, const std::vector<CostRowValues> &rows, const std::
     if (colscale[k] == 0) colscale[k] = 1;
   for (int i = 0; i < ne; ++i) {
     for (int k = 0; k < K; ++k) A(i, k) = rows[i][k] / times[i] / colscale[k];
-    b(i) = 1.0;
+    b(i) = entry >= 0 ? 1.0 - entry * rows[i][4] / times[i] : 1.0;
   }
   double c[K] = {}, best = 1e300, rms = 0;
   for (int mask = 1; mask < (1 << K); ++mask) {
     std::vector<int> cols;
+    if (entry >= 0 && (mask >> 4 & 1)) continue;
     for (int k = 0; k < K; ++k)
       if (mask >> k & 1) cols.push_back(k);
     Eigen::MatrixXd As(ne, (int) cols.size());
@@ -150,7 +155,16 @@ void fit_cost_row(int order, const std::vector<CostRowValues> &rows, const std::
       best = r;
       for (int k = 0; k < K; ++k) c[k] = 0;
       for (std::size_t j = 0; j < cols.size(); ++j) c[cols[j]] = x((int) j) / colscale[cols[j]];
+      if (entry >= 0) c[4] = entry;
     }
+  }
+  if (quiet) {
+    for (int i = 0; i < ne; ++i) {
+      double f = 0;
+      for (int k = 0; k < K; ++k) f += c[k] * rows[i][k];
+      rms += (f / times[i] - 1) * (f / times[i] - 1);
+    }
+    return rms;
   }
   for (int i = 0; i < ne; ++i) {
     double f = 0;
@@ -165,6 +179,7 @@ void fit_cost_row(int order, const std::vector<CostRowValues> &rows, const std::
               1e9 * c[2], 1e9 * c[3], 1e9 * c[4], 1e9 * c[5], std::sqrt(rms / ne));
   std::fflush(stdout);
   std::fflush(stderr);
+  return rms;
 }
 
 std::string cost_label(const CostSet &set, int leaf, int depth, bool periodic)
@@ -224,7 +239,7 @@ int cost_fit(int order_lo, int order_hi, int reps, std::size_t only_n)
 // The fit again from the measured times that `calibrate --cost` printed on stderr (lines
 // "order P SET N n leaf L depth D open|periodic: ... measured T s, ..."), with the counts of the
 // trees computed anew: for a changed model, without measuring again.
-int cost_refit(const char *path)
+int cost_refit(const char *path, bool shared_entry)
 {
   std::FILE *f = std::fopen(path, "r");
   if (!f) {
@@ -256,8 +271,21 @@ int cost_refit(const char *path)
     labels[order].push_back(cost_label(*set, leaf, depth, periodic));
   }
   std::fclose(f);
+  // one entry constant for all orders: the one of least summed squared residual among 0 ..
+  // 3000 ns
+  double entry = -1, best = 1e300;
+  if (shared_entry)
+    for (double e = 0; e <= 3000e-9; e += 50e-9) {
+      double r = 0;
+      for (auto &[order, rw] : rows) r += fit_cost_row(order, rw, times[order], labels[order], e, true);
+      if (r < best) {
+        best = r;
+        entry = e;
+      }
+    }
   std::printf("    // order, point, pair, translation, cell, entry, spill (ns)   [rms relative residual of the fit]\n");
-  for (auto &[order, r] : rows) fit_cost_row(order, r, times[order], labels[order]);
+  if (shared_entry) std::printf("    // entry: one constant for all orders, %.0f ns (least squares over all orders)\n", 1e9 * entry);
+  for (auto &[order, r] : rows) fit_cost_row(order, r, times[order], labels[order], entry);
   return 0;
 }
 
@@ -396,7 +424,8 @@ int main(int argc, char **argv)
     if (argc > 3 && !std::strcmp(argv[2], "--orders")) std::sscanf(argv[3], "%d-%d", &lo, &hi);
     return periodic_errors(lo, hi);
   }
-  if (argc > 2 && !std::strcmp(argv[1], "--refit")) return cost_refit(argv[2]);
+  if (argc > 2 && !std::strcmp(argv[1], "--refit"))
+    return cost_refit(argv[2], argc > 3 && !std::strcmp(argv[3], "--shared-entry"));
   if (argc > 1 && !std::strcmp(argv[1], "--cost")) {
     int lo = 3, hi = 14, reps = 3;
     std::size_t only_n = 0;

@@ -6,7 +6,8 @@
 #   PVFMM_SOURCE_DIR=/path/to/pvfmm EXAFMMT_SOURCE_DIR=/path/to/exafmm-t bash bench/anchors/run.sh
 # (either or both; later runs take them from the build directory). Prints a markdown table and
 # writes it, with provenance, to bench/anchors/results/.
-# Settings (environment): OMP_NUM_THREADS (1), ANCHORS_SETS ("uniform:1e5 plummer:1e5 uniform:1e6"),
+# Settings (environment): OMP_NUM_THREADS (1; above 1 the settings are chosen and compared by wall
+# time, else by CPU time), ANCHORS_SETS ("uniform:1e5 plummer:1e5 uniform:1e6"),
 # ANCHORS_TARGETS ("1e-5 1e-7 1e-10"), ANCHORS_ROUNDS (3; timed rounds), ANCHORS_ROUNDS_LARGE (2; for
 # N >= 1e6), the sweeps OURS_ACC, OURS_LEAVES, PVFMM_ORDERS, PVFMM_LEAVES, EXAFMMT_ORDERS,
 # EXAFMMT_LEAVES (and *_LEAVES_LARGE for N >= 1e6), KIFMM_JOBS (2; build jobs).
@@ -31,6 +32,8 @@ exafmmt_leaves="${EXAFMMT_LEAVES:-64 128 256 400}"
 exafmmt_leaves_large="${EXAFMMT_LEAVES_LARGE:-64 400}"
 threads="${OMP_NUM_THREADS:-1}"
 export OMP_NUM_THREADS="$threads" OPENBLAS_NUM_THREADS="$threads"
+# the time compared: CPU time on one thread, wall time on more (table.py)
+if [ "$threads" -gt 1 ]; then export ANCHORS_TIME=wall; else export ANCHORS_TIME=cpu; fi
 
 # ---- the build: the anchors' sources from the environment or the build directory's cache
 cached() { [ -f "$build/CMakeCache.txt" ] && sed -n "s/^$1:[A-Z]*=//p" "$build/CMakeCache.txt" || true; }
@@ -172,7 +175,7 @@ out="bench/anchors/results/anchors_$(git rev-parse --short HEAD)_$stamp.md"
   [ -n "$exafmmt_src" ] && echo "- exafmm-t commit: $(commit_of "$exafmmt_src")"
   echo "- machine: \`$(uname -a)\`, nproc $(env -u OMP_NUM_THREADS -u OMP_THREAD_LIMIT nproc), $(grep -m1 'model name' /proc/cpuinfo | sed 's/.*: //')"
   echo "- load average before: $load_before; after: $load_after"
-  echo "- threads: OMP_NUM_THREADS=$threads (OPENBLAS_NUM_THREADS=$threads), one MPI process (PVFMM)"
+  echo "- threads: OMP_NUM_THREADS=$threads (OPENBLAS_NUM_THREADS=$threads), one MPI process (PVFMM); time compared: $ANCHORS_TIME"
   echo "- compiler: $(c++ --version | head -1); ours: -O3 -march=native -mprefer-vector-width=512" \
        "-fno-math-errno; PVFMM, exafmm-t: -O3 -march=native, OpenBLAS $(dpkg-query -W -f='${Version}' libopenblas-dev 2>/dev/null || echo '?'), FFTW"
   echo "- timed rounds: $rounds (N >= 1e6: $rounds_large), each after the sweep (round 0) that chose the settings"

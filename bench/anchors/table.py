@@ -8,11 +8,19 @@ as run.sh collects them) and
   orders RAW SET N TARGETS...   prints "code order" for the orders selected for these targets
   table RAW TARGETS...          prints the markdown tables (per code and case; our time over the
                                 faster anchor's)
+  efficiency RAW1 RAW2 TARGETS...  prints each code's parallel efficiency: its least wall time at
+                                one thread (RAW1) over twice its least at two (RAW2), per case
+The time compared (selection and ratios) is the CPU time of the process, or the wall time with
+ANCHORS_TIME=wall (run.sh sets it for more than one thread).
 Codes: ours (order and tree chosen by the engine for a requested accuracy), ours_leaf (ours and,
 besides, the order chosen for a requested accuracy with a given leaf size: the best of both),
 pvfmm, exafmmt."""
+import os
 import statistics
 import sys
+
+METRIC = os.environ.get("ANCHORS_TIME", "cpu")    # "cpu" or "wall"
+MI = 1 if METRIC == "wall" else 0
 
 NAMES = {"ours": "ours (automatic)", "ours_leaf": "ours (best leaf of sweep)", "pvfmm": "PVFMM",
          "exafmmt": "exafmm-t"}
@@ -48,7 +56,7 @@ def select(rows, s, n, target):
         cand = [r for r in rows if r["round"] == 0 and r["code"] == code and r["set"] == s and r["n"] == n
                 and r["err"] <= target]
         if cand:
-            out[code] = min(cand, key=lambda r: r["cpu"])["setting"]
+            out[code] = min(cand, key=lambda r: r[METRIC])["setting"]
     return out
 
 
@@ -106,22 +114,46 @@ def table(rows, targets):
             for code in ("ours", "ours_leaf"):
                 if code not in med or not anchors:
                     continue
-                fast = min(anchors, key=lambda a: med[a][0])
+                fast = min(anchors, key=lambda a: med[a][MI])
                 pr = med[code][2]
                 per = []
                 for k in sorted(pr):
-                    at = [med[a][2][k][0] for a in anchors if k in med[a][2]]
+                    at = [med[a][2][k][MI] for a in anchors if k in med[a][2]]
                     if at:
-                        per.append(pr[k][0] / min(at))
-                wall_ratio = med[code][1] / min(med[a][1] for a in anchors)
+                        per.append(pr[k][MI] / min(at))
+                wall_ratio = med[code][1 - MI] / min(med[a][1 - MI] for a in anchors)
                 ratios.append((s, n, t, NAMES[code], NAMES[fast], per, statistics.median(per), wall_ratio))
     out.append("")
-    out.append("| point set | N | target error | ours | faster anchor (median CPU) | ours / faster anchor, "
-               "CPU, per round | median | ratio of median wall times | <= 0.67 |")
+    other = "CPU" if METRIC == "wall" else "wall"
+    out.append(f"| point set | N | target error | ours | faster anchor (median {METRIC}) | ours / faster anchor, "
+               f"{METRIC}, per round | median | ratio of median {other} times | <= 0.67 |")
     out.append("|---|---|---|---|---|---|---|---|---|")
     for s, n, t, code, fast, per, m, w in ratios:
         out.append(f"| {s} | {n:.0e} | {t:g} | {code} | {fast} | " + ", ".join(f"{x:.2f}" for x in per)
                    + f" | {m:.3f} | {w:.2f} | {'yes' if m <= 0.67 else 'no'} |")
+    return "\n".join(out)
+
+
+def least_wall(rows, s, n, code, target):
+    """median wall time (timed rounds) of the code's setting of least wall time meeting the target"""
+    cand = [r for r in rows if r["round"] == 0 and r["code"] == code and r["set"] == s and r["n"] == n
+            and r["err"] <= target]
+    if not cand:
+        return None
+    setting = min(cand, key=lambda r: r["wall"])["setting"]
+    return setting, statistics.median(v[1] for v in per_round(case_rows(rows, s, n, code, setting)).values())
+
+
+def efficiency(rows1, rows2, targets):
+    out = ["| point set | N | target error | code | one thread: setting, wall s | two threads: setting, wall s "
+           "| parallel efficiency |", "|---|---|---|---|---|---|---|"]
+    for s, n in cases(rows2):
+        for t in targets:
+            for code in ("ours",) + ANCHORS:
+                a, b = least_wall(rows1, s, n, code, t), least_wall(rows2, s, n, code, t)
+                if a and b:
+                    out.append(f"| {s} | {n:.0e} | {t:g} | {NAMES[code]} | {a[0]}, {a[1]:.3f} | {b[0]}, {b[1]:.3f} "
+                               f"| {a[1] / (2 * b[1]):.2f} |")
     return "\n".join(out)
 
 
@@ -146,6 +178,8 @@ def main(argv):
             print(code, o)
     elif cmd == "table":
         print(table(rows, [float(x) for x in argv[3:]]))
+    elif cmd == "efficiency":
+        print(efficiency(rows, read(argv[3]), [float(x) for x in argv[4:]]))
     else:
         sys.exit(__doc__)
 

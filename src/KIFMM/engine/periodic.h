@@ -46,7 +46,7 @@ struct PeriodicImageLists : ImageLists {
   std::vector<int> color_off;          // pairs of color c: [color_off[c], color_off[c+1])
   std::vector<int> self_leaves;        // leaves with targets (each its own pairs, one round)
   // M2L kernels of the levels 1 and 2 summed over the colleague slots of one source parent
-  // (periodic_m2l_top), per operator set and slot mask; kept across evaluations (p <= 10)
+  // (periodic_m2l_top), per operator set and slot mask; kept across evaluations
   struct TopKernel {
     std::shared_ptr<const void> ops;    // keeps the operator set (the key) alive
     uint32_t mask = 0;

@@ -325,28 +325,14 @@ template <class K> void FmmEvaluator<K>::periodic_m2l_top(int l)
 #pragma omp for schedule(dynamic, 8)
     for (int i = 0; i < nsrc; ++i) fft_->forward(up(sources[i]), &xhat_[(std::size_t) i * 32], xstride, ws);
   }
-  const double *kern = ops_[l]->m2l_hat.data();
   const int nblocks = nf / 16;
   const std::vector<const double *> cached = periodic_top_kernels(l, groups.mask, kid, nblocks);
-#pragma omp parallel
-  {
-    std::vector<double> kc(64 * 32);
-#pragma omp for schedule(dynamic, 1)
-    for (int blk = 0; blk < nblocks; ++blk) {
-      const std::size_t xo = blk * xstride, yo = blk * ystride;
-      for (int g = 0; g < ngroup; ++g) {
-        const double *kg;
-        if (cached[g]) {
-          kg = cached[g] + (std::size_t) blk * 64 * 32;
-        } else {
-          for (int st = 0; st < 64; ++st)
-            periodic_top::sum_kernels(kern, kid[(std::size_t) g * 64 + st], blk, &kc[(std::size_t) st * 32]);
-          kg = kc.data();
-        }
-        periodic_top::multiply_group(kg, groups.pairs[g], &nonzero[(std::size_t) g * 64], xtab.data(), ytab.data(),
-                                     xo, yo);
-      }
-    }
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int blk = 0; blk < nblocks; ++blk) {
+    const std::size_t xo = blk * xstride, yo = blk * ystride;
+    for (int g = 0; g < ngroup; ++g)
+      periodic_top::multiply_group(cached[g] + (std::size_t) blk * 64 * 32, groups.pairs[g],
+                                   &nonzero[(std::size_t) g * 64], xtab.data(), ytab.data(), xo, yo);
   }
   const double s = scale_[l];
 #pragma omp parallel if (ntrg > 4)
@@ -360,9 +346,11 @@ template <class K> void FmmEvaluator<K>::periodic_m2l_top(int l)
   }
 }
 
-// Summed slot kernels of the groups of level l, kept across evaluations in plists_.top_kernels
-// (orders <= 10: at most 8 masks x 64 x nfreq complex, 36 MB at p = 10); null where not kept
-// (higher orders: summed per block during the products).
+// Summed slot kernels of the groups of level l (one pointer per group), kept across evaluations
+// in plists_.top_kernels
+// (at most 8 masks x 64 x nfreq complex: 36 MB at p = 10, 99 MB at p = 14; summing them per
+// block during the products instead doubled the evaluation time of small periodic trees at
+// p >= 11).
 template <class K>
 std::vector<const double *> FmmEvaluator<K>::periodic_top_kernels(int l, const std::vector<uint32_t> &group_mask,
                                                                   const std::vector<std::vector<int>> &kid,
@@ -370,7 +358,6 @@ std::vector<const double *> FmmEvaluator<K>::periodic_top_kernels(int l, const s
 {
   const int ngroup = (int) group_mask.size();
   std::vector<const double *> cached(ngroup, nullptr);
-  if (p_ > 10) return cached;
   const double *kern = ops_[l]->m2l_hat.data();
   auto &cache = plists_.top_kernels;
   if (cache.size() > 16) cache.clear();

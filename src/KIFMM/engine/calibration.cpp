@@ -87,24 +87,27 @@ namespace {
 // leaf) and of two Plummer spheres (open, leaf sizes 16-4096), with the counts of their actual
 // trees (actual_tree_counts); in brackets the RMS relative residual of the fit (provenance of
 // the measurement: bench/results/README.md). The translation and cell terms are nearly
-// collinear (a constant that is 0 went to the others).
+// collinear (a constant that is 0 went to the others). The entry constant (the per-pair task
+// overhead of the near field, which does not depend on the order) is one value for all orders,
+// fitted over all of them (`calibrate --refit LOG --shared-entry`): fitted per order it went
+// from 0 to 4.9 us with the noise of the high orders and decided depth 0 against depth 1.
 struct CostRow {
   int order;
   double point, pair, translation, cell, entry, spill;
 };
 const CostRow kCost[] = {
-    {3, 192.1, 0.5602, 24.75, 0, 650, 39.83},    // [0.095]
-    {4, 237.3, 0.5169, 74.71, 1.281e+04, 0, 2.833},    // [0.071]
-    {5, 274.2, 0.5242, 36.49, 9171, 1033, 147.2},    // [0.085]
-    {6, 261.7, 0.5463, 71.93, 5.829e+04, 0, 142.4},    // [0.088]
-    {7, 218.3, 0.5421, 125.9, 7.812e+04, 0, 80.38},    // [0.110]
-    {8, 278.9, 0.5662, 345.4, 1.28e+05, 0, 0},    // [0.095]
-    {9, 119, 0.5664, 136.5, 2.974e+05, 0, 417.4},    // [0.086]
-    {10, 71.51, 0.5988, 23.21, 2.907e+05, 1254, 1529},    // [0.108]
-    {11, 77.32, 0.5796, 0, 4.721e+05, 1481, 62.71},    // [0.135]
-    {12, 0, 0.6033, 0, 6.782e+05, 2556, 0},    // [0.137]
-    {13, 0, 0.6336, 0, 8.682e+05, 4855, 3528},    // [0.150]
-    {14, 142.5, 0.6344, 0, 1.105e+06, 0, 0},    // [0.159]
+    {3, 167.2, 0.5682, 30.35, 2649, 500, 36.93},    // [0.102]
+    {4, 324.8, 0.494, 74.96, 0, 500, 39.38},    // [0.095]
+    {5, 153.6, 0.5479, 0, 2.603e+04, 500, 130.9},    // [0.097]
+    {6, 322.2, 0.536, 108.8, 4.208e+04, 500, 164.9},    // [0.096]
+    {7, 260.7, 0.5355, 165, 6.224e+04, 500, 97.79},    // [0.113]
+    {8, 309.5, 0.5622, 390.8, 1.118e+05, 500, 0},    // [0.097]
+    {9, 125.8, 0.5652, 163.1, 2.833e+05, 500, 390.1},    // [0.089]
+    {10, 60.75, 0.6013, 0, 3.099e+05, 500, 1573},    // [0.109]
+    {11, 0, 0.5604, 89.16, 4.156e+05, 500, 514.4},    // [0.139]
+    {12, 48.91, 0.5679, 169.5, 5.48e+05, 500, 4536},    // [0.155]
+    {13, 61.53, 0.552, 0, 7.506e+05, 500, 0},    // [0.154]
+    {14, 73.26, 0.5774, 0, 9.422e+05, 500, 434.8},    // [0.183]
 };
 
 // Pair-cost weights of the counts beyond the fitted constants, measured 2026-11-23 (one thread,
@@ -291,14 +294,14 @@ struct GridRow {
   double cell;
 };
 const GridRow kGridCost[] = {
-    {3, 4173},    // [0.130]
-    {4, 1.221e+04},    // [0.138]
-    {5, 7310},    // [0.065]
-    {6, 3.453e+04},    // [0.069]
-    {7, 5.556e+04},    // [0.053]
-    {8, 7.857e+04},    // [0.032]
-    {9, 1.555e+05},    // [0.108]
-    {10, 1.41e+05},    // [0.081]
+    {3, 2375},    // [0.207]
+    {4, 1734},    // [0.145]
+    {5, 1.227e+04},    // [0.107]
+    {6, 1.576e+04},    // [0.093]
+    {7, 3.689e+04},    // [0.067]
+    {8, 4.754e+04},    // [0.082]
+    {9, 1.112e+05},    // [0.054]
+    {10, 1.151e+05},    // [0.085]
 };
 }    // namespace
 
@@ -451,6 +454,13 @@ TreeChoice choose_tree(const KernelSpec &kernel, const Options &options, std::si
       leaves.insert((int) std::lround(std::sqrt((double) leaf_size_for_depth(n, d) * leaf_size_for_depth(n, d + 1))));
   }
   if (default_leaf_size(options.order) > uniform.leaf_size) leaves.insert(default_leaf_size(options.order));
+  // a direct sum (uniform depth 0) also against one split of the root: clustered points leave
+  // some children dense and others empty, and a leaf with itself costs more per pair than two
+  // adjacent leaves (platelets' end state, 3094 atoms, orders 9-14: depth 1 1.2x faster)
+  if (uniform.depth == 0 && n > 1) {
+    leaves.insert(leaf_size_for_depth(n, 1));
+    leaves.insert((int) std::lround(std::sqrt((double) leaf_size_for_depth(n, 0) * leaf_size_for_depth(n, 1))));
+  }
   const ChoicePoints pts(kernel, options, n, xyz);
   // the uniform choice unless another tree is modelled cheaper by more than kChoiceMargin (the
   // fit's residuals are 4-8 %: without the margin, trees of near-equal modelled cost were

@@ -305,10 +305,12 @@ const GridRow kGridCost[] = {
 };
 }    // namespace
 
-TreeCounts uniform_grid_counts(std::size_t n, int k)
+TreeCounts uniform_grid_counts(std::size_t n, int k, const double *shape)
 {
   TreeCounts t;
-  const double cells = (double) k * k * k, m = (double) n / cells;
+  int kd[3];
+  grid_cells_per_axis(k, shape, kd);
+  const double cells = (double) kd[0] * kd[1] * kd[2], m = (double) n / cells;
   t.near_pairs = 27 * cells * m * m / 2;
   t.self_pairs = cells * m * m / 2;
   t.entries = 14 * cells;
@@ -316,11 +318,14 @@ TreeCounts uniform_grid_counts(std::size_t n, int k)
   return t;
 }
 
-TreeCounts grid_counts(std::size_t n, const double *xyz, const double center[3], double half_width, int k)
+TreeCounts grid_counts(std::size_t n, const double *xyz, const double center[3], double half_width, int k,
+                       const double *shape)
 {
-  const int kc = k * k * k;
+  int kd[3];
+  grid_cells_per_axis(k, shape, kd);
+  const int kc = kd[0] * kd[1] * kd[2];
   std::vector<double> occ(kc, 0.0);
-  for (std::size_t i = 0; i < n; ++i) occ[grid_cell_index(xyz + 3 * i, center, half_width, k)] += 1;
+  for (std::size_t i = 0; i < n; ++i) occ[grid_cell_index(xyz + 3 * i, center, half_width, shape, kd)] += 1;
   TreeCounts t;
   t.cells = kc;
   t.entries = 14.0 * kc;
@@ -328,7 +333,7 @@ TreeCounts grid_counts(std::size_t n, const double *xyz, const double center[3],
     if (occ[b] == 0) continue;
     for (int o = 0; o < 27; ++o) {
       signed char sh[3];
-      t.near_pairs += occ[b] * occ[grid_neighbour_cell(b, k, o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, sh)] / 2;
+      t.near_pairs += occ[b] * occ[grid_neighbour_cell(b, kd, o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, sh)] / 2;
     }
     t.self_pairs += occ[b] * occ[b] / 2;
   }
@@ -360,8 +365,51 @@ int max_grid_cells(int order)
   return k;
 }
 
-TreeChoice choose_tree(int order, std::size_t n, bool periodic, bool grid)
+int max_grid_cells_long(int order, const double *shape)
 {
+  const int kmax = max_grid_cells(order);
+  if (!shape || kmax == 0) return kmax;
+  const double cap = (double) kmax * kmax * kmax;
+  int k = 3;
+  for (int kk = 3; kk <= 64 * kmax; ++kk) {
+    int kd[3];
+    grid_cells_per_axis(kk, shape, kd);
+    if ((double) kd[0] * kd[1] * kd[2] > cap) break;
+    k = kk;
+  }
+  return k;
+}
+
+bool octree_fits_cell(const double shape[3])
+{
+  return 1.0 / std::min(shape[0], std::min(shape[1], shape[2])) <= max_cell_aspect * (1 + 1e-12);
+}
+
+bool grid_fits_cell(int order, int k, const double shape[3])
+{
+  if (k < 3 || k > max_grid_cells_long(order, shape)) return false;
+  int kd[3];
+  grid_cells_per_axis(k, shape, kd);
+  return grid_cell_aspect(kd, shape) <= max_cell_aspect * (1 + 1e-12);
+}
+
+TreeChoice choose_tree(int order, std::size_t n, bool periodic, bool grid, const double *shape)
+{
+  const bool cube = !shape || (shape[0] == 1.0 && shape[1] == 1.0 && shape[2] == 1.0);
+  if (cube) shape = nullptr;
+  // a periodic cell the octree does not fit: the grid of least modelled cost whose cells do
+  if (periodic && shape && !octree_fits_cell(shape)) {
+    TreeChoice g{choose_tree(order, n, false).leaf_size, 0, 0.0, 0};
+    for (int k = 3; k <= max_grid_cells_long(order, shape); ++k) {
+      if (!grid_fits_cell(order, k, shape)) continue;
+      const double c = modelled_grid_cost(order, n, uniform_grid_counts(n, k, shape));
+      if (g.grid == 0 || c < g.cost) {
+        g.cost = c;
+        g.grid = k;
+      }
+    }
+    return g;
+  }
   TreeChoice best{leaf_size_for_depth(n, 0), 0, modelled_cost(order, n, periodic, 0)};
   // depths with at least one point per leaf on average
   for (int d = 1; d <= 20 && std::ldexp(1.0, 3 * d) <= (double) n; ++d) {
@@ -374,8 +422,9 @@ TreeChoice choose_tree(int order, std::size_t n, bool periodic, bool grid)
   // convolution: a model that charged that work per rank picked worse grids and, on 4 ranks at
   // order 8, the octree at 2.0 open evaluations where the grid measured 1.6; bench_scaling)
   TreeChoice g = best;
-  for (int k = 3; k <= max_grid_cells(order) && (double) k * k * k <= (double) n; ++k) {
-    const double c = modelled_grid_cost(order, n, uniform_grid_counts(n, k));
+  for (int k = 3; k <= max_grid_cells_long(order, shape) && uniform_grid_counts(n, k, shape).cells <= (double) n; ++k) {
+    if (shape && !grid_fits_cell(order, k, shape)) continue;
+    const double c = modelled_grid_cost(order, n, uniform_grid_counts(n, k, shape));
     if (g.grid == 0 || c < g.cost) {
       g.cost = c;
       g.grid = k;
@@ -396,10 +445,10 @@ struct ChoicePoints {
   {
     xyz = p;
     if (o.periodic) {
-      wrap_into_cell(n, p, o.root_center, o.root_half_width, wrapped);
+      wrap_into_cell(n, p, o.root_center, o.root_half_width, wrapped, o.root_shape);
       xyz = wrapped.data();
     }
-    root = evaluation_root(o.fixed_root, o.root_center, o.root_half_width,
+    root = evaluation_root(o.fixed_root, o.root_center, o.root_half_width, o.root_shape,
                            kernel.type == KernelType::Yukawa, n, xyz, n, xyz);
   }
 };
@@ -441,6 +490,22 @@ TreeChoice model_tree(const KernelSpec &kernel, const Options &options, std::siz
 
 TreeChoice choose_tree(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz)
 {
+  const double *shape = options.fixed_root ? options.root_shape : nullptr;
+  if (options.periodic && shape && !octree_fits_cell(shape)) {
+    // only grids: the one of least modelled cost on the actual occupancies
+    const ChoicePoints pts(kernel, options, n, xyz);
+    TreeChoice g{choose_tree(options.order, n, false).leaf_size, 0, 0.0, 0};
+    for (int k = 3; k <= max_grid_cells_long(options.order, shape); ++k) {
+      if (!grid_fits_cell(options.order, k, shape)) continue;
+      const double c = modelled_grid_cost(
+          options.order, n, grid_counts(n, pts.xyz, options.root_center, options.root_half_width, k, shape));
+      if (g.grid == 0 || c < g.cost) {
+        g.cost = c;
+        g.grid = k;
+      }
+    }
+    return g;
+  }
   const TreeChoice uniform = choose_tree(options.order, n, options.periodic);
   if (n == 0) return uniform;
   // candidates, largest first: leaf sizes not below the uniform choice's (the uniform depths
@@ -480,10 +545,13 @@ TreeChoice choose_tree(const KernelSpec &kernel, const Options &options, std::si
   // 3e3 atoms, order 6, depth 2: modelled 0.0056 s, measured 0.0081 s, where the grid of 4^3
   // cells is modelled 0.0057 s and measured 0.0047-0.0053 s; bench_periodic)
   if (options.periodic) {
+    const double *sh = pts.root.cubic() ? nullptr : options.root_shape;
     TreeChoice grid{tree.leaf_size, tree.depth, 0.0, 0};
-    for (int k = 3; k <= max_grid_cells(options.order) && (double) k * k * k <= (double) n; ++k) {
+    for (int k = 3; k <= max_grid_cells_long(options.order, sh) && uniform_grid_counts(n, k, sh).cells <= (double) n;
+         ++k) {
+      if (sh && !grid_fits_cell(options.order, k, sh)) continue;
       const double c = modelled_grid_cost(
-          options.order, n, grid_counts(n, pts.xyz, options.root_center, options.root_half_width, k));
+          options.order, n, grid_counts(n, pts.xyz, options.root_center, options.root_half_width, k, sh));
       if (grid.grid == 0 || c < grid.cost) {
         grid.cost = c;
         grid.grid = k;

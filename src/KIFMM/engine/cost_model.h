@@ -102,13 +102,18 @@ TreeCounts actual_tree_counts(const KernelSpec &kernel, const Options &options, 
 // translations = 0. cost = point * n + pair * (near + self_extra * self) + entry * entries +
 // grid_cell * cells: the octree's constants and one per-order constant per grid cell
 // (grid_cell_cost, fitted by `bench/calibrate --grid-cost`).
-TreeCounts uniform_grid_counts(std::size_t n, int k);
+// shape: a rectangular periodic cell (grid_cells_per_axis; null: a cube).
+TreeCounts uniform_grid_counts(std::size_t n, int k, const double *shape = nullptr);
 // The same for points wrapped into the cell [center - h, center + h)^3 (actual occupancies).
-TreeCounts grid_counts(std::size_t n, const double *xyz, const double center[3], double half_width, int k);
+TreeCounts grid_counts(std::size_t n, const double *xyz, const double center[3], double half_width, int k,
+                       const double *shape = nullptr);
 double grid_cell_cost(int order);    // seconds
 double modelled_grid_cost(int order, std::size_t n, const TreeCounts &counts);
 // Largest grid (cells per side) offered at this order: its kernels (periodic_grid.h) and the
 // convolution buffer are each at most 64 MB; 0 above the largest order with a fitted constant.
+// Rectangular cells: at most max_grid_cells^3 cells in all.
 int max_grid_cells(int order);
+// Cells along the longest axis of the grids to try in a cell of this shape: 3 .. this.
+int max_grid_cells_long(int order, const double *shape);
 
 }    // namespace kifmm

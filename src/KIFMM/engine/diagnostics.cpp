@@ -72,7 +72,7 @@ void exact_gradient(const Evaluator &ev, Communicator *comm, std::size_t n_src,
     if (nt == 0 || n_src == 0) return;
     if (opt.periodic)
       periodic_direct_sum(ev.kernel(), opt.root_center, opt.root_half_width, n_src, src_xyz, src_q,
-                          nt, t, nullptr, g);
+                          nt, t, nullptr, g, opt.root_shape);
     else
       direct_sum(ev.kernel(), n_src, src_xyz, src_q, nt, t, nullptr, g);
   };

@@ -42,6 +42,7 @@ void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, co
   if (opt_.fixed_root) {
     for (int d = 0; d < 3; ++d) fixed.center[d] = opt_.root_center[d];
     fixed.half_width = opt_.root_half_width;
+    for (int d = 0; d < 3; ++d) fixed.shape[d] = opt_.root_shape[d];
   }
   {    // own points into the box (periodic: wrapped into the cell, as in serial)
     const double *sxyz = xyz;
@@ -137,6 +138,7 @@ template <class K> void FmmEvaluator<K>::distributed_first_tree(Communicator &co
   const double *sxyz = dd.xyz.data(), *sq = dd.q.data();
   const std::size_t ns = nonzero_sources(nl, sxyz, sq, kxyz, kq);
   build_octree(tree_, dd.root, ns, sxyz, nl, dd.xyz.data(), opt_.leaf_size, opt_.max_depth, &dd.top);
+  shape_surfaces(dd.root);
   sorted_copies(ns, sxyz, sq, 0, nullptr);
   const double tb = omp_get_wtime();
   st.t_tree += tb - ta;
@@ -175,6 +177,7 @@ template <class K> void FmmEvaluator<K>::distributed_tree(std::size_t n, const d
   const double *sxyz = dd.xyz.data(), *sq = dd.q.data();
   const std::size_t ns = nonzero_sources(nl, sxyz, sq, kxyz, kq);
   build_octree(tree_, dd.root, ns, sxyz, nl, dd.xyz.data(), opt_.leaf_size, opt_.max_depth, &dd.top);
+  shape_surfaces(dd.root);
   keep_targets(tree_, n);
   sorted_copies(ns, sxyz, sq, n, xyz);
   const double t2b = omp_get_wtime();

@@ -1,19 +1,20 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
-// Ewald split of the lattice sum of the unit cell (half-width 1, period 2) for the Laplace
-// (tin-foil, k = 0 omitted, uniform background) and Yukawa kernels: real-space terms with
-// erfc, reciprocal weights, background constant (internal to periodic.cpp and
-// periodic_grid.cpp).
+// Ewald split of the lattice sum of the unit cell (half-width 1, period 2; or a rectangular
+// unit cell of half-widths shape[d], largest 1, periods 2 shape[d]) for the Laplace (tin-foil,
+// k = 0 omitted, uniform background) and Yukawa kernels: real-space terms with erfc,
+// reciprocal weights, background constant (internal to periodic.cpp and periodic_grid.cpp).
 #pragma once
 
 #include "kifmm.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace kifmm::ewald {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kSqrtPi = 1.77245385090551602729;
-constexpr double kPeriod = 2.0;                    // unit cell: half-width 1
+constexpr double kPeriod = 2.0;                    // unit cube: half-width 1
 constexpr double kVolume = 8.0;
 constexpr double kRealCut = 2.3;                   // Ewald real-space terms beyond: < exp(-47)
 
@@ -22,14 +23,62 @@ struct Split {
   bool yukawa = false, direct = false;
   double kappa = 0, alpha = 3.0, a = 0;    // a = kappa / (2 alpha)
   int nreal = 2, kmax = 13;
+  double shape[3] = {1.0, 1.0, 1.0};         // half-widths of the unit cell
+  double period[3] = {kPeriod, kPeriod, kPeriod};
+  double volume = kVolume;
 
-  explicit Split(const KernelSpec &k)
+  explicit Split(const KernelSpec &k, const double *cell_shape = nullptr)
   {
     yukawa = k.type == KernelType::Yukawa;
     kappa = yukawa ? k.kappa : 0.0;
     // images beyond |n| = 2 are > 3.9 away: exp(-kappa 3.9) < 1e-17 for kappa >= 10
     direct = yukawa && kappa >= 10.0;
     a = kappa / (2 * alpha);
+    if (cell_shape) {
+      volume = 1.0;
+      for (int d = 0; d < 3; ++d) {
+        shape[d] = cell_shape[d];
+        period[d] = 2.0 * cell_shape[d];
+        volume *= period[d];
+      }
+      // the split scaled with the shortest edge (real-space images within a few short periods,
+      // reciprocal vectors up to the same |k| per short axis): the cube's split for cubes
+      smin = std::min(shape[0], std::min(shape[1], shape[2]));
+      alpha /= smin;
+      kmax = (int) std::ceil(kmax / smin - 1e-9);
+      a = kappa / (2 * alpha);
+    }
+  }
+  double smin = 1.0;    // shortest half-width of the unit cell
+  // distance beyond which the real-space terms are negligible (direct sum: the kernel itself)
+  double real_cut() const { return direct ? 3.9 : kRealCut * smin; }
+  // images |n_d| <= images(d, r) along axis d reach every term within real_cut() of a point
+  // at |r_d| <= rmax (and always the first shell)
+  int images(int d, double rmax) const
+  {
+    return std::max(1, (int) std::floor((real_cut() + rmax) / period[d]));
+  }
+  // reciprocal vectors k_d = pi m_d / shape[d] with |k| <= pi kmax: |m_d| <= kmax shape[d]
+  int kmax_axis(int d) const { return (int) std::floor(kmax * shape[d] + 1e-12); }
+  bool k_inside(const int m[3]) const
+  {
+    double s = 0;
+    for (int d = 0; d < 3; ++d) s += (m[d] / shape[d]) * (m[d] / shape[d]);
+    return s <= double(kmax) * kmax * (1 + 1e-12);
+  }
+  double k2_of(const int m[3]) const
+  {
+    double s = 0;
+    for (int d = 0; d < 3; ++d) s += (m[d] / shape[d]) * (m[d] / shape[d]);
+    return kPi * kPi * s;
+  }
+  // reciprocal weight of |k|^2 = k2 (k = 0: Laplace omitted)
+  double weight_k2(double k2) const
+  {
+    if (direct) return 0.0;
+    if (!yukawa) return k2 == 0.0 ? 0.0 : (4 * kPi / volume) * std::exp(-k2 / (4 * alpha * alpha)) / k2;
+    const double q2 = k2 + kappa * kappa;
+    return (4 * kPi / volume) * std::exp(-q2 / (4 * alpha * alpha)) / q2;
   }
   double bare(double r) const { return yukawa ? std::exp(-kappa * r) / r : 1.0 / r; }
   // real-space term phi(r) and F = phi'(r)/r; reg = phi minus the bare kernel
@@ -71,16 +120,9 @@ struct Split {
     if (!yukawa) return -2 * alpha / kSqrtPi;
     return kappa * std::erfc(a) - (2 * alpha / kSqrtPi) * std::exp(-a * a);
   }
-  // reciprocal weight of k = pi m (m integer vector), m2 = |m|^2
-  double weight(int m2) const
-  {
-    if (direct) return 0.0;
-    const double k2 = kPi * kPi * m2;
-    if (!yukawa) return m2 == 0 ? 0.0 : (4 * kPi / kVolume) * std::exp(-k2 / (4 * alpha * alpha)) / k2;
-    const double q2 = k2 + kappa * kappa;
-    return (4 * kPi / kVolume) * std::exp(-q2 / (4 * alpha * alpha)) / q2;
-  }
-  double background() const { return (yukawa || direct) ? 0.0 : -kPi / (kVolume * alpha * alpha); }
+  // reciprocal weight of k = pi m (m integer vector), m2 = |m|^2 (unit cube)
+  double weight(int m2) const { return weight_k2(kPi * kPi * m2); }
+  double background() const { return (yukawa || direct) ? 0.0 : -kPi / (volume * alpha * alpha); }
 };
 
 }    // namespace kifmm::ewald

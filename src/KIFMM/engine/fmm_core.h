@@ -85,6 +85,7 @@ template <class K> class FmmEvaluator : public Evaluator {
   const KernelSpec &kernel() const override { return spec_; }
   const Options &options() const override { return opt_; }
   void set_root(const double center[3], double half_width) override;
+  void set_root_box(const double center[3], const double half_widths[3]) override;
 
   // Internals of the last evaluation (tests).
   const Octree &tree() const { return tree_; }
@@ -96,7 +97,16 @@ template <class K> class FmmEvaluator : public Evaluator {
   Options opt_;
   Stats stats_;
   int p_ = 6, nsurf_ = 0;
-  SurfacePoints inner_, outer_;
+  SurfacePoints inner_, outer_;    // unit surfaces of the root's shape (surf_shape_)
+  double surf_shape_[3] = {1.0, 1.0, 1.0};
+  // inner_ / outer_ for the shape of this root (rectangular roots: scaled per axis)
+  void shape_surfaces(const RootBox &root)
+  {
+    if (root.shape[0] == surf_shape_[0] && root.shape[1] == surf_shape_[1] && root.shape[2] == surf_shape_[2]) return;
+    for (int d = 0; d < 3; ++d) surf_shape_[d] = root.shape[d];
+    inner_ = shaped_surface(p_, kRadiusInner, surf_shape_);
+    outer_ = shaped_surface(p_, kRadiusOuter, surf_shape_);
+  }
   Octree tree_;
   InteractionLists lists_;
   std::vector<std::shared_ptr<const OperatorSet>> ops_;    // per level
@@ -168,7 +178,7 @@ template <class K> class FmmEvaluator : public Evaluator {
   // mutual near field (sources = targets): open boundaries use mutual_, periodic plists_
   MutualPlan mutual_;
   std::size_t mutual_near(bool want_pot, const std::vector<MutualPair> &pairs, const std::vector<int> &color_off,
-                          const std::vector<int> &self_leaves, double L);
+                          const std::vector<int> &self_leaves, const double *L);
 
   // ---- steps that depend on the boundary, chosen at construction: open_steps() (below),
   // periodic_steps() (periodic_core.h). The shared passes call them through boundary_.
@@ -241,8 +251,10 @@ template <class K> class FmmEvaluator : public Evaluator {
                 bool same_points, std::size_t own_sources);
   void grid_passes(Communicator *comm, std::size_t own_sources, bool want_pot, bool same_points);
   struct GridGeometry {
-    int k = 0, kc = 0;                             // cells per side, cells
-    double H = 0, w = 0, h = 0, L = 0;             // cell half-width, grid cell width and half-width, period
+    int k[3] = {0, 0, 0}, kc = 0;                  // cells per axis, cells
+    double H = 0, h = 0;                           // largest half-width of the periodic cell, of a grid cell
+    double cs[3] = {1, 1, 1};                      // a grid cell's half-widths in units of h (largest 1)
+    double w[3] = {0, 0, 0}, L[3] = {0, 0, 0};     // grid cell widths, periods
   };
   static constexpr int kGridBatch = 64;            // cells per batched operator application
   GridGeometry grid_geometry() const;
@@ -307,14 +319,15 @@ template <class K> void FmmEvaluator<K>::setup_operators(double &t_setup)
   scale_.assign(nl, 1.0);
   for (int l = 0; l < nl; ++l) {
     double s;
-    const UnitKernel uk = make_unit_kernel(k_, tree_.half_width(l), s);
+    const UnitKernel uk = make_unit_kernel(k_, tree_.half_width(l), s, tree_.root.shape);
     scale_[l] = s;
     if (l < first_level()) continue;    // levels without expansions (open: 0, 1)
     if (level_independent_operators<K>() && l > 0 && ops_[l - 1]) {
       ops_[l] = ops_[l - 1];
       continue;
     }
-    ops_[l] = get_operator_set(uk, p_, opt_.cache_dir, &t_setup);
+    // the on-disk cache holds cubic cells only (a box that changes shape would fill it)
+    ops_[l] = get_operator_set(uk, p_, uk.cubic() ? opt_.cache_dir : std::string(), &t_setup);
   }
   std::size_t bytes = 0;
   for (int l = 0; l < nl; ++l)
@@ -592,7 +605,7 @@ template <class K> void FmmEvaluator<K>::leaf_pass(bool want_pot, bool want_grad
   // array are merged into one longer loop. Sources = targets: each pair of leaves once
   if (mutual_.active) {
     stats_.mutual_pairs = mutual_.pairs.size();
-    stats_.coincident_pairs += mutual_near(want_pot, mutual_.pairs, mutual_.color_off, mutual_.self_leaves, 0.0);
+    stats_.coincident_pairs += mutual_near(want_pot, mutual_.pairs, mutual_.color_off, mutual_.self_leaves, nullptr);
   }
   // (a partial plan leaves the U entries with an unmarked leaf to the one-sided loop)
   const bool all_mutual = mutual_.active && !mutual_.partial;
@@ -676,12 +689,12 @@ template <class K> void FmmEvaluator<K>::leaf_pass(bool want_pot, bool want_grad
 
 // Mutual near field: each leaf with itself, then the pairs of adjacent leaves in color order
 // (a color's pairs share no leaf). Every target accumulates in the fixed order self, color 0,
-// 1, ..., so results do not depend on the threads. L: length of the periodic cell (pair shifts
-// are in units of L). Returns the coincident pairs.
+// 1, ..., so results do not depend on the threads. L: edges of the periodic cell (pair shifts
+// are in units of them; null: open boundaries). Returns the coincident pairs.
 template <class K>
 std::size_t FmmEvaluator<K>::mutual_near(bool want_pot, const std::vector<MutualPair> &pairs,
                                          const std::vector<int> &color_off, const std::vector<int> &self,
-                                         double L)
+                                         const double *L)
 {
   const auto &cells = tree_.cells;
   auto run = [&](int a, int b, const double *sh, bool self_pair) -> std::size_t {
@@ -696,7 +709,7 @@ std::size_t FmmEvaluator<K>::mutual_near(bool want_pot, const std::vector<Mutual
   };
   (void) color_off;    // the pairs are stored by color; run_mutual_tasks keeps that order per leaf
   return run_mutual_tasks(cells.size(), self, pairs, [&](int a, int b, const signed char *s, bool self_pair) {
-    const double sh[3] = {s[0] * L, s[1] * L, s[2] * L};
+    const double sh[3] = {L ? s[0] * L[0] : 0.0, L ? s[1] * L[1] : 0.0, L ? s[2] * L[2] : 0.0};
     return run(a, b, sh, self_pair);
   });
 }
@@ -748,9 +761,10 @@ template <class K>
 void FmmEvaluator<K>::evaluate_tree(double t0, std::size_t ns, const double *sxyz, const double *sq,
                                     std::size_t n_trg, const double *trg_xyz, double *pot, double *grad)
 {
-  const RootBox root = evaluation_root(opt_.fixed_root, opt_.root_center, opt_.root_half_width,
+  const RootBox root = evaluation_root(opt_.fixed_root, opt_.root_center, opt_.root_half_width, opt_.root_shape,
                                        !level_independent_operators<K>(), ns, sxyz, n_trg, trg_xyz);
   build_octree(tree_, root, ns, sxyz, n_trg, trg_xyz, opt_.leaf_size, opt_.max_depth);
+  shape_surfaces(root);
   sorted_copies(ns, sxyz, sq, n_trg, trg_xyz);
   const double t1 = omp_get_wtime();
   stats_.t_tree = t1 - t0;

@@ -15,9 +15,12 @@
 namespace kifmm {
 
 // A kernel in unit-box coordinates, type-erased: only used by the (cold) operator setup.
+// shape: the half-widths of the unit box per axis (largest 1; cubes: 1 1 1), RootBox::shape.
 struct UnitKernel {
   std::function<double(double r2)> g;    // G_unit(sqrt(r2)), r2 > 0
-  std::string id;                        // unique, used as cache key
+  std::string id;                        // unique, used as cache key (shape included)
+  double shape[3] = {1.0, 1.0, 1.0};
+  bool cubic() const { return shape[0] == 1.0 && shape[1] == 1.0 && shape[2] == 1.0; }
 };
 
 namespace detail {
@@ -46,7 +49,8 @@ template <class K> constexpr bool level_independent_operators()
   return detail::is_homogeneous<K>::value;
 }
 
-template <class K> UnitKernel make_unit_kernel(const K &k, double h, double &s)
+namespace detail {
+template <class K> UnitKernel unit_kernel_of(const K &k, double h, double &s)
 {
   if constexpr (detail::is_homogeneous<K>::value) {
     s = std::pow(h, K::degree);
@@ -64,6 +68,20 @@ template <class K> UnitKernel make_unit_kernel(const K &k, double h, double &s)
                       },
                       kernel_id(k) + buf};
   }
+}
+}    // namespace detail
+
+// Unit kernel of boxes of half-width h (times shape[d] along axis d; null: cubes).
+template <class K> UnitKernel make_unit_kernel(const K &k, double h, double &s, const double *shape = nullptr)
+{
+  UnitKernel u = detail::unit_kernel_of(k, h, s);
+  if (shape && !(shape[0] == 1.0 && shape[1] == 1.0 && shape[2] == 1.0)) {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "_box%a_%a_%a", shape[0], shape[1], shape[2]);
+    u.id += buf;
+    for (int d = 0; d < 3; ++d) u.shape[d] = shape[d];
+  }
+  return u;
 }
 
 }    // namespace kifmm

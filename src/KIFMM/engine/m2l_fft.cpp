@@ -77,7 +77,8 @@ void m2l_kernel_transforms(const UnitKernel &k, int p, std::vector<double> &hat,
         for (int i = -(p - 1); i <= p - 1; ++i)
           for (int j = -(p - 1); j <= p - 1; ++j)
             for (int l = -(p - 1); l <= p - 1; ++l) {
-              const double rx = 2.0 * ox + i * dx, ry = 2.0 * oy + j * dx, rz = 2.0 * oz + l * dx;
+              const double rx = (2.0 * ox + i * dx) * k.shape[0], ry = (2.0 * oy + j * dx) * k.shape[1],
+                           rz = (2.0 * oz + l * dx) * k.shape[2];
               const int gi = (i + n) % n, gj = (j + n) % n, gl = (l + n) % n;
               grid[((std::size_t) gi * n + gj) * n + gl] = k.g(rx * rx + ry * ry + rz * rz);
             }

@@ -13,7 +13,7 @@ void Octree::center(const Cell &c, double out[3]) const
 {
   const double h = half_width(c.level);
   const int a[3] = {c.ix, c.iy, c.iz};
-  for (int d = 0; d < 3; ++d) out[d] = root.center[d] - root.half_width + (2 * a[d] + 1) * h;
+  for (int d = 0; d < 3; ++d) out[d] = root.center[d] + root.shape[d] * ((2 * a[d] + 1) * h - root.half_width);
 }
 
 std::size_t Octree::bytes() const
@@ -59,13 +59,15 @@ RootBox bounding_cube_of(const double lo[3], const double hi[3])
 }
 
 RootBox evaluation_root(bool fixed, const double fixed_center[3], double fixed_half_width,
-                        bool size_dependent_operators, std::size_t n_src, const double *src_xyz,
+                        const double *fixed_shape, bool size_dependent_operators, std::size_t n_src, const double *src_xyz,
                         std::size_t n_trg, const double *trg_xyz)
 {
   RootBox root;
   if (fixed) {
     for (int d = 0; d < 3; ++d) root.center[d] = fixed_center[d];
     root.half_width = fixed_half_width;
+    if (fixed_shape)
+      for (int d = 0; d < 3; ++d) root.shape[d] = fixed_shape[d];
     return root;
   }
   root = bounding_cube(n_src, src_xyz, n_trg, trg_xyz);
@@ -77,14 +79,16 @@ void morton_keys(const RootBox &root, std::size_t n, const double *xyz, std::vec
 {
   keys.resize(n);
   const double nmax = double(1u << kMortonBits);
-  const double inv = nmax / (2.0 * root.half_width);
-  double lo[3];
-  for (int d = 0; d < 3; ++d) lo[d] = root.center[d] - root.half_width;
+  double lo[3], inv[3];
+  for (int d = 0; d < 3; ++d) {
+    lo[d] = root.center[d] - root.half_width * root.shape[d];
+    inv[d] = nmax / (2.0 * root.half_width * root.shape[d]);
+  }
 #pragma omp parallel for schedule(static)
   for (std::size_t i = 0; i < n; ++i) {
     uint32_t a[3];
     for (int d = 0; d < 3; ++d) {
-      double u = std::floor((xyz[3 * i + d] - lo[d]) * inv);
+      double u = std::floor((xyz[3 * i + d] - lo[d]) * inv[d]);
       u = std::min(std::max(u, 0.0), nmax - 1);
       a[d] = (uint32_t) u;
     }

@@ -16,9 +16,14 @@
 
 namespace kifmm {
 
+// Root box: center and half-width; shape: the half-widths per axis in units of half_width
+// (largest 1): a rectangular root (the periodic cell of an orthogonal box). Cells at every
+// level have the root's shape; Morton keys and anchors are taken in the root's unit coordinates.
 struct RootBox {
   double center[3] = {0, 0, 0};
   double half_width = 1.0;
+  double shape[3] = {1.0, 1.0, 1.0};
+  bool cubic() const { return shape[0] == 1.0 && shape[1] == 1.0 && shape[2] == 1.0; }
 };
 
 struct Cell {
@@ -65,7 +70,10 @@ struct Octree {
   std::vector<uint32_t> trg_order;    // sorted position -> input target index
   std::vector<int> top_index;         // distributed: index in the TopTree, -1 below it (else empty)
 
+  // half-width of the cells of a level (times root.shape[d] along axis d)
   double half_width(int level) const { return root.half_width / double(uint64_t(1) << level); }
+  // edge of the root along axis d (the period of a periodic root)
+  double period(int d) const { return 2.0 * root.half_width * root.shape[d]; }
   void center(const Cell &c, double out[3]) const;
   std::size_t bytes() const;
 };
@@ -88,13 +96,13 @@ RootBox bounding_cube(std::size_t n_src, const double *src_xyz, std::size_t n_tr
 // Bounding cube from the coordinate bounds (lo/hi over all points; same result as above).
 RootBox bounding_cube_of(const double lo[3], const double hi[3]);
 
-// Root box of one evaluation: the given box when fixed (fixed_center, fixed_half_width: the
-// periodic cell or a user root), else the bounding cube of the points, its half-width rounded
+// Root box of one evaluation: the given box when fixed (fixed_center, fixed_half_width and
+// fixed_shape (null: a cube): the periodic cell or a user root), else the bounding cube of the points, its half-width rounded
 // up to a power of two when the kernel's operators depend on the box size (Yukawa: kappa h),
 // so that the boxes of every level come from a fixed ladder of sizes and operator sets are
 // reused when the points move between calls. Used by the evaluator and by the tree choice.
 RootBox evaluation_root(bool fixed, const double fixed_center[3], double fixed_half_width,
-                        bool size_dependent_operators, std::size_t n_src, const double *src_xyz,
+                        const double *fixed_shape, bool size_dependent_operators, std::size_t n_src, const double *src_xyz,
                         std::size_t n_trg, const double *trg_xyz);
 
 // Build the tree. Points outside a given root box are clamped into its boundary cells.

@@ -7,6 +7,7 @@
 #include <Eigen/Dense>
 #include <Eigen/SVD>
 #include <cmath>
+#include <cstdlib>
 
 namespace kifmm {
 
@@ -19,7 +20,7 @@ std::size_t OperatorSet::bytes() const
   return b * sizeof(double);
 }
 
-double pinv_relative_cutoff(int) { return 1e-15; }
+double pinv_relative_cutoff(int) { const char *e = std::getenv("KIFMM_PINV_CUT"); return e ? std::atof(e) : 1e-15; }
 
 void matvec(const double *M, int rows, int cols, const double *x, double *y, double alpha, bool accumulate)
 {
@@ -71,10 +72,11 @@ RowMat kernel_matrix(const UnitKernel &k, const SurfacePoints &trg, const Surfac
 
 std::vector<double> to_vec(const RowMat &M) { return std::vector<double>(M.data(), M.data() + M.size()); }
 
-SurfacePoints child_surface(const SurfacePoints &unit_alpha, int oct)
+SurfacePoints child_surface(const SurfacePoints &unit_alpha, int oct, const double shape[3])
 {
   // surface of child octant oct of the unit box, in parent unit coordinates
-  const double c[3] = {(oct & 1) ? 0.5 : -0.5, (oct & 2) ? 0.5 : -0.5, (oct & 4) ? 0.5 : -0.5};
+  const double c[3] = {((oct & 1) ? 0.5 : -0.5) * shape[0], ((oct & 2) ? 0.5 : -0.5) * shape[1],
+                       ((oct & 4) ? 0.5 : -0.5) * shape[2]};
   SurfacePoints s;
   box_surface(unit_alpha, c, 0.5, s);
   return s;
@@ -89,7 +91,9 @@ std::shared_ptr<OperatorSet> compute_operators(const UnitKernel &k, int p)
   op->id = k.id;
   const int ns = surface_size(p);
   op->nsurf = ns;
-  const SurfacePoints inner = unit_surface(p, kRadiusInner), outer = unit_surface(p, kRadiusOuter);
+  // the unit box (half-widths k.shape): surfaces scaled per axis
+  const SurfacePoints inner = shaped_surface(p, kRadiusInner, k.shape),
+                      outer = shaped_surface(p, kRadiusOuter, k.shape);
 
   // upward check (outer) <- upward equivalent (inner); the downward matrix is its transpose
   // for a symmetric kernel: K(inner, outer) = K(outer, inner)^T.
@@ -112,11 +116,11 @@ std::shared_ptr<OperatorSet> compute_operators(const UnitKernel &k, int p)
 
   for (int oct = 0; oct < 8; ++oct) {
     // M2M: parent outer check <- child inner equivalent, then parent pseudo-inverse
-    const RowMat Kc = kernel_matrix(k, outer, child_surface(inner, oct));
+    const RowMat Kc = kernel_matrix(k, outer, child_surface(inner, oct, k.shape));
     const RowMat m2m = UA * (UB * Kc);
     op->m2m[oct] = to_vec(m2m);
     // L2L: child inner check <- parent outer equivalent (to the child's check potential)
-    op->l2l[oct] = to_vec(kernel_matrix(k, child_surface(inner, oct), outer));
+    op->l2l[oct] = to_vec(kernel_matrix(k, child_surface(inner, oct, k.shape), outer));
   }
   m2l_kernel_transforms(k, p, op->m2l_hat, op->nfreq);
   return op;

@@ -11,6 +11,7 @@
 #include <map>
 #include <mutex>
 #include <stdexcept>
+#include <tuple>
 
 namespace kifmm {
 
@@ -102,19 +103,23 @@ bool plan_mutual_near(const Octree &tree, InteractionLists &lists, PeriodicImage
   return true;
 }
 
-void wrap_into_cell(std::size_t n, const double *xyz, const double center[3], double h, std::vector<double> &out)
+void wrap_into_cell(std::size_t n, const double *xyz, const double center[3], double h, std::vector<double> &out,
+                    const double *shape)
 {
   out.resize(3 * n);
-  const double L = 2.0 * h;
+  double L[3], lo[3];
+  for (int d = 0; d < 3; ++d) {
+    L[d] = 2.0 * h * (shape ? shape[d] : 1.0);
+    lo[d] = center[d] - 0.5 * L[d];
+  }
 #pragma omp parallel for schedule(static) if (n > 100000)
   for (std::size_t i = 0; i < n; ++i)
     for (int d = 0; d < 3; ++d) {
-      const double lo = center[d] - h;
       double x = xyz[3 * i + d];
-      if (x < lo || x >= lo + L) {
-        x -= L * std::floor((x - lo) / L);
-        if (x >= lo + L) x -= L;    // rounding
-        if (x < lo) x = lo;
+      if (x < lo[d] || x >= lo[d] + L[d]) {
+        x -= L[d] * std::floor((x - lo[d]) / L[d]);
+        if (x >= lo[d] + L[d]) x -= L[d];    // rounding
+        if (x < lo[d]) x = lo[d];
       }
       out[3 * i + d] = x;
     }
@@ -124,23 +129,25 @@ void wrap_into_cell(std::size_t n, const double *xyz, const double center[3], do
 
 namespace {
 
-// Real-space part at r over images |n|_inf <= nreal; `regular`: the n = 0 term without the
-// bare kernel (limit at r = 0); `near_regular`: every |n|_inf <= 1 term without the bare kernel.
-void real_sum(const Split &s, const double r[3], bool regular, bool near_regular, double &v, double g[3],
-              int N)
+// Real-space part at r over the images reaching real_cut() (at least the first shell); `regular`:
+// the n = 0 term without the bare kernel (limit at r = 0); `near_regular`: every |n|_inf <= 1
+// term without the bare kernel.
+void real_sum(const Split &s, const double r[3], bool regular, bool near_regular, double &v, double g[3])
 {
   v = 0;
   g[0] = g[1] = g[2] = 0;
-  for (int nx = -N; nx <= N; ++nx)
-    for (int ny = -N; ny <= N; ++ny)
-      for (int nz = -N; nz <= N; ++nz) {
+  const int N[3] = {s.images(0, std::fabs(r[0])), s.images(1, std::fabs(r[1])), s.images(2, std::fabs(r[2]))};
+  const double cut = s.real_cut();
+  for (int nx = -N[0]; nx <= N[0]; ++nx)
+    for (int ny = -N[1]; ny <= N[1]; ++ny)
+      for (int nz = -N[2]; nz <= N[2]; ++nz) {
         const bool zero = nx == 0 && ny == 0 && nz == 0;
         const bool near = std::abs(nx) <= 1 && std::abs(ny) <= 1 && std::abs(nz) <= 1;
         const bool reg = (zero && regular) || (near && near_regular);
-        const double d[3] = {r[0] + kPeriod * nx, r[1] + kPeriod * ny, r[2] + kPeriod * nz};
+        const double d[3] = {r[0] + s.period[0] * nx, r[1] + s.period[1] * ny, r[2] + s.period[2] * nz};
         const double rr = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
         if (s.direct) {
-          if (reg || rr == 0.0) continue;    // direct sum: the near/bare terms are simply left out
+          if (reg || rr == 0.0 || rr > cut) continue;    // direct sum: the near/bare terms are left out
           double t, F;
           s.real(rr, false, t, F);
           v += t;
@@ -151,7 +158,7 @@ void real_sum(const Split &s, const double r[3], bool regular, bool near_regular
           if (reg) v += s.reg0();
           continue;
         }
-        if (!reg && rr > kRealCut) continue;    // erfc(alpha r) and the Yukawa terms < 1e-20
+        if (!reg && rr > cut) continue;    // erfc(alpha r) and the Yukawa terms < 1e-20
         double t, F;
         s.real(rr, reg, t, F);
         v += t;
@@ -159,99 +166,135 @@ void real_sum(const Split &s, const double r[3], bool regular, bool near_regular
       }
 }
 
-double recip_sum(const Split &s, const double r[3], double g[3])
+// reciprocal vectors m (k_d = pi m_d / shape_d) of a half space (plus m = 0) with weights
+// (doubled for the +-m pairs), and the phase tables' extent K_d per axis
+struct Reciprocal {
+  std::vector<std::array<int, 3>> m;
+  std::vector<double> w;
+  int K[3] = {0, 0, 0};
+  explicit Reciprocal(const Split &s)
+  {
+    if (s.direct) return;
+    for (int d = 0; d < 3; ++d) K[d] = s.kmax_axis(d);
+    for (int mx = 0; mx <= K[0]; ++mx)
+      for (int my = -K[1]; my <= K[1]; ++my)
+        for (int mz = -K[2]; mz <= K[2]; ++mz) {
+          if (mx == 0 && (my < 0 || (my == 0 && mz < 0))) continue;
+          const int v[3] = {mx, my, mz};
+          if (!s.k_inside(v)) continue;
+          const double ww = s.weight_k2(s.k2_of(v));
+          if (ww == 0.0) continue;
+          m.push_back({mx, my, mz});
+          w.push_back(mx == 0 && my == 0 && mz == 0 ? ww : 2 * ww);
+        }
+  }
+  // e[d][m + K_d] = exp(i pi m u_d / shape_d)
+  void phases(const Split &s, const double *u, std::vector<std::complex<double>> e[3]) const
+  {
+    for (int d = 0; d < 3; ++d) {
+      e[d].resize(2 * K[d] + 1);
+      for (int q = -K[d]; q <= K[d]; ++q) e[d][q + K[d]] = std::polar(1.0, kPi * q * u[d] / s.shape[d]);
+    }
+  }
+  std::complex<double> phase(const std::vector<std::complex<double>> e[3], std::size_t q) const
+  {
+    return e[0][m[q][0] + K[0]] * e[1][m[q][1] + K[1]] * e[2][m[q][2] + K[2]];
+  }
+};
+
+double recip_sum(const Split &s, const Reciprocal &rc, const double r[3], double g[3])
 {
   g[0] = g[1] = g[2] = 0;
   if (s.direct) return 0.0;
-  const int K = s.kmax;
-  double v = 0;
   std::vector<std::complex<double>> e[3];
-  for (int d = 0; d < 3; ++d) {
-    e[d].resize(2 * K + 1);
-    for (int m = -K; m <= K; ++m) e[d][m + K] = std::polar(1.0, kPi * m * r[d]);
+  rc.phases(s, r, e);
+  double v = 0;
+  for (std::size_t q = 0; q < rc.m.size(); ++q) {
+    const std::complex<double> ph = rc.phase(e, q);
+    v += rc.w[q] * ph.real();
+    for (int d = 0; d < 3; ++d) g[d] -= rc.w[q] * kPi * rc.m[q][d] / s.shape[d] * ph.imag();
   }
-  for (int mx = -K; mx <= K; ++mx)
-    for (int my = -K; my <= K; ++my)
-      for (int mz = -K; mz <= K; ++mz) {
-        const int m2 = mx * mx + my * my + mz * mz;
-        if (m2 > K * K) continue;
-        const double w = s.weight(m2);
-        if (w == 0.0) continue;
-        const std::complex<double> ph = e[0][mx + K] * e[1][my + K] * e[2][mz + K];
-        v += w * ph.real();
-        g[0] -= w * kPi * mx * ph.imag();
-        g[1] -= w * kPi * my * ph.imag();
-        g[2] -= w * kPi * mz * ph.imag();
-      }
   return v;
 }
 
 }    // namespace
 
-void periodic_green_unit(const KernelSpec &k, const double r[3], bool regular, double &value, double grad[3])
+void periodic_green_unit(const KernelSpec &k, const double r[3], bool regular, double &value, double grad[3],
+                         const double *shape)
 {
-  const Split s(k);
+  const Split s(k, shape);
+  const Reciprocal rc(s);
   double gr[3], gk[3], rf[3];
-  // fold into [-1, 1]^3 (the regular form keeps r: its n = 0 term is the one at r)
-  for (int d = 0; d < 3; ++d) rf[d] = regular ? r[d] : r[d] - kPeriod * std::nearbyint(r[d] / kPeriod);
-  r = rf;
-  real_sum(s, r, regular, false, value, gr, regular ? 3 : s.nreal);
-  value += recip_sum(s, r, gk) + s.background();
+  // fold into the cell (the regular form keeps r: its n = 0 term is the one at r)
+  for (int d = 0; d < 3; ++d) rf[d] = regular ? r[d] : r[d] - s.period[d] * std::nearbyint(r[d] / s.period[d]);
+  real_sum(s, rf, regular, false, value, gr);
+  value += recip_sum(s, rc, rf, gk) + s.background();
   for (int d = 0; d < 3; ++d) grad[d] = gr[d] + gk[d];
 }
 
 namespace {
 
-std::shared_ptr<LatticeTable> compute_table(const KernelSpec &k, int p)
+std::shared_ptr<LatticeTable> compute_table(const KernelSpec &k, int p, const double shape[3])
 {
-  const Split s(k);
+  const Split s(k, shape);
+  const Reciprocal rc(s);
   auto t = std::make_shared<LatticeTable>();
   t->p = p;
-  t->quad = k.type == KernelType::Laplace ? 2 * kPi / (3 * kVolume) : 0.0;
+  t->quad = k.type == KernelType::Laplace ? 2 * kPi / (3 * s.volume) : 0.0;
+  for (int d = 0; d < 3; ++d) t->shape[d] = shape[d];
   const int m = 2 * p - 1;
   t->r.assign((std::size_t) m * m * m, 0.0);
   const double step = p > 1 ? 2.0 * kRadiusInner / (p - 1) : 0.0;
-  // R is invariant under the cubic group: compute 0 <= i <= j <= k only
+  const bool cube = shape[0] == 1.0 && shape[1] == 1.0 && shape[2] == 1.0;
+  // R is even in every coordinate; a cube's is also invariant under permutations of the axes
+  // (then only 0 <= i <= j <= l is computed)
+  std::vector<std::array<int, 3>> todo;
   for (int i = 0; i < p; ++i)
-    for (int j = i; j < p; ++j)
-      for (int l = j; l < p; ++l) {
-        const double r[3] = {i * step, j * step, l * step};
-        double v, g[3];
-        real_sum(s, r, true, true, v, g, s.nreal);
-        if (!s.direct) {
-          double gk[3];
-          v += recip_sum(s, r, gk) + s.background();
-        }
-        v -= t->quad * (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-        const int a[3] = {i, j, l};
-        const int perm[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
-        for (auto &pm : perm)
-          for (int sx = -1; sx <= 1; sx += 2)
-            for (int sy = -1; sy <= 1; sy += 2)
-              for (int sz = -1; sz <= 1; sz += 2) {
-                const int x = sx * a[pm[0]], y = sy * a[pm[1]], z = sz * a[pm[2]];
-                t->r[((std::size_t) (x + p - 1) * m + (y + p - 1)) * m + (z + p - 1)] = v;
-              }
-      }
+    for (int j = cube ? i : 0; j < p; ++j)
+      for (int l = cube ? j : 0; l < p; ++l) todo.push_back({i, j, l});
+#pragma omp parallel for schedule(dynamic, 4)
+  for (std::size_t e = 0; e < todo.size(); ++e) {
+    const int *a = todo[e].data();
+    const double r[3] = {a[0] * step * shape[0], a[1] * step * shape[1], a[2] * step * shape[2]};
+    double v, g[3];
+    real_sum(s, r, true, true, v, g);
+    if (!s.direct) {
+      double gk[3];
+      v += recip_sum(s, rc, r, gk) + s.background();
+    }
+    v -= t->quad * (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    const int perm[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+    for (int pi = 0; pi < (cube ? 6 : 1); ++pi) {
+      const int *pm = perm[pi];
+      for (int sx = -1; sx <= 1; sx += 2)
+        for (int sy = -1; sy <= 1; sy += 2)
+          for (int sz = -1; sz <= 1; sz += 2) {
+            const int x = sx * a[pm[0]], y = sy * a[pm[1]], z = sz * a[pm[2]];
+            t->r[((std::size_t) (x + p - 1) * m + (y + p - 1)) * m + (z + p - 1)] = v;
+          }
+    }
+  }
   return t;
 }
 
 }    // namespace
 
-std::shared_ptr<const LatticeTable> lattice_table(const KernelSpec &k, int p)
+std::shared_ptr<const LatticeTable> lattice_table(const KernelSpec &k, int p, const double *shape)
 {
   static std::mutex mtx;
-  static std::map<std::pair<double, int>, std::shared_ptr<const LatticeTable>> cache;
-  const double key = k.type == KernelType::Yukawa ? k.kappa : -1.0;
+  static std::map<std::tuple<double, int, double, double, double>, std::shared_ptr<const LatticeTable>> cache;
+  const double one[3] = {1.0, 1.0, 1.0};
+  const double *sh = shape ? shape : one;
+  const auto key = std::make_tuple(k.type == KernelType::Yukawa ? k.kappa : -1.0, p, sh[0], sh[1], sh[2]);
   {
     std::lock_guard<std::mutex> lock(mtx);
-    auto it = cache.find({key, p});
+    auto it = cache.find(key);
     if (it != cache.end()) return it->second;
   }
-  auto t = compute_table(k, p);
+  auto t = compute_table(k, p, sh);
   std::lock_guard<std::mutex> lock(mtx);
-  if (cache.size() > 64) cache.clear();    // yukawa boxes that keep changing size
-  cache[{key, p}] = t;
+  if (cache.size() > 64) cache.clear();    // boxes that keep changing size (yukawa) or shape
+  cache[key] = t;
   return t;
 }
 
@@ -259,48 +302,28 @@ std::shared_ptr<const LatticeTable> lattice_table(const KernelSpec &k, int p)
 
 void periodic_direct_sum(const KernelSpec &kernel, const double center[3], double h, std::size_t n_src,
                          const double *src_xyz, const double *src_q, std::size_t n_trg, const double *trg_xyz,
-                         double *pot, double *grad)
+                         double *pot, double *grad, const double *shape)
 {
   KernelSpec uk = kernel;
   if (uk.type == KernelType::Yukawa) uk.kappa = kernel.kappa * h;
-  const Split s(uk);
+  const Split s(uk, shape);
+  const Reciprocal rc(s);
   std::vector<double> su, tu;
-  wrap_into_cell(n_src, src_xyz, center, h, su);
-  wrap_into_cell(n_trg, trg_xyz, center, h, tu);
+  wrap_into_cell(n_src, src_xyz, center, h, su, shape);
+  wrap_into_cell(n_trg, trg_xyz, center, h, tu, shape);
   for (std::size_t i = 0; i < n_src; ++i)
     for (int d = 0; d < 3; ++d) su[3 * i + d] = (su[3 * i + d] - center[d]) / h;
   for (std::size_t i = 0; i < n_trg; ++i)
     for (int d = 0; d < 3; ++d) tu[3 * i + d] = (tu[3 * i + d] - center[d]) / h;
-  // structure factors S(m) = sum_j q_j exp(i pi m.y_j) over a half space of m (plus m = 0)
-  const int K = s.kmax;
-  std::vector<std::array<int, 3>> ms;
-  std::vector<double> w;
-  if (!s.direct)
-    for (int mx = 0; mx <= K; ++mx)
-      for (int my = -K; my <= K; ++my)
-        for (int mz = -K; mz <= K; ++mz) {
-          if (mx == 0 && (my < 0 || (my == 0 && mz < 0))) continue;
-          const int m2 = mx * mx + my * my + mz * mz;
-          if (m2 > K * K) continue;
-          const double ww = s.weight(m2);
-          if (ww == 0.0) continue;
-          ms.push_back({mx, my, mz});
-          w.push_back(m2 == 0 ? ww : 2 * ww);    // +-m pairs
-        }
-  const std::size_t nk = ms.size();
-  auto phases = [&](const double *u, std::vector<std::complex<double>> &e) {
-    e.resize(3 * (2 * K + 1));
-    for (int d = 0; d < 3; ++d)
-      for (int m = -K; m <= K; ++m) e[d * (2 * K + 1) + m + K] = std::polar(1.0, kPi * m * u[d]);
-  };
+  // structure factors S(m) = sum_j q_j exp(i k.y_j)
+  const std::size_t nk = rc.m.size();
   std::vector<std::complex<double>> S(nk, 0.0);
   {
-    std::vector<std::complex<double>> e;
+    std::vector<std::complex<double>> e[3];
     for (std::size_t j = 0; j < n_src; ++j) {
       if (src_q[j] == 0.0) continue;
-      phases(&su[3 * j], e);
-      for (std::size_t q = 0; q < nk; ++q)
-        S[q] += src_q[j] * e[ms[q][0] + K] * e[(2 * K + 1) + ms[q][1] + K] * e[2 * (2 * K + 1) + ms[q][2] + K];
+      rc.phases(s, &su[3 * j], e);
+      for (std::size_t q = 0; q < nk; ++q) S[q] += src_q[j] * rc.phase(e, q);
     }
   }
   const double bg = s.background();
@@ -314,21 +337,20 @@ void periodic_direct_sum(const KernelSpec &kernel, const double center[3], doubl
       double r[3], t, gg[3];
       for (int d = 0; d < 3; ++d) {
         r[d] = tu[3 * i + d] - su[3 * j + d];
-        r[d] -= kPeriod * std::nearbyint(r[d] / kPeriod);    // [-1, 1]: |n| <= 1 covers r < 3
+        r[d] -= s.period[d] * std::nearbyint(r[d] / s.period[d]);    // into the cell
       }
       const bool same = r[0] == 0.0 && r[1] == 0.0 && r[2] == 0.0;
-      real_sum(s, r, same, false, t, gg, s.direct ? 2 : 1);
+      real_sum(s, r, same, false, t, gg);
       v += src_q[j] * t;
       for (int d = 0; d < 3; ++d) g[d] += src_q[j] * gg[d];
     }
     if (nk > 0) {
-      std::vector<std::complex<double>> e;
-      phases(&tu[3 * i], e);
+      std::vector<std::complex<double>> e[3];
+      rc.phases(s, &tu[3 * i], e);
       for (std::size_t q = 0; q < nk; ++q) {
-        const std::complex<double> ph =
-            e[ms[q][0] + K] * e[(2 * K + 1) + ms[q][1] + K] * e[2 * (2 * K + 1) + ms[q][2] + K] * std::conj(S[q]);
-        v += w[q] * ph.real();
-        for (int d = 0; d < 3; ++d) g[d] -= w[q] * kPi * ms[q][d] * ph.imag();
+        const std::complex<double> ph = rc.phase(e, q) * std::conj(S[q]);
+        v += rc.w[q] * ph.real();
+        for (int d = 0; d < 3; ++d) g[d] -= rc.w[q] * kPi * rc.m[q][d] / s.shape[d] * ph.imag();
       }
     }
     if (pot) pot[i] = v / h;

@@ -71,9 +71,10 @@ bool plan_mutual_near(const Octree &tree, InteractionLists &lists, PeriodicImage
 void build_periodic_interaction_lists(const Octree &tree, InteractionLists &lists,
                                       PeriodicImageLists &images);
 
-// Copies of the points wrapped into the cell [center - h, center + h)^3.
+// Copies of the points wrapped into the cell [center - h, center + h)^3, or with shape (the
+// half-widths per axis in units of h, RootBox::shape) into the box [center - h shape, center + h shape).
 void wrap_into_cell(std::size_t n, const double *xyz, const double center[3], double h,
-                    std::vector<double> &out);
+                    std::vector<double> &out, const double *shape = nullptr);
 
 // Far-image operator table of the unit root (half-width 1, period 2) for order p:
 // r[((i+p-1)*m + j+p-1)*m + k+p-1] = R((i,j,k) * 2*1.05/(p-1)), m = 2p-1. For a root of
@@ -81,24 +82,31 @@ void wrap_into_cell(std::size_t n, const double *xyz, const double center[3], do
 // Laplace: R = H + quad |r|^2 (quad = 2 pi / 3V, the uniform background, not harmonic); the
 // table holds the harmonic H (reproduced by equivalent densities), the quadratic part is added
 // at the targets from the sources' charge, dipole and second moment (exact).
+// Rectangular cells (shape: half-widths per axis, largest 1, RootBox::shape): the unit cell has
+// periods 2 shape[d] and the table R at the shaped lattice points (i shape[0], j shape[1],
+// l shape[2]) * 2*1.05/(p-1).
 struct LatticeTable {
   int p = 0;
   std::vector<double> r;
-  double quad = 0.0;    // unit cell (V = 8): pi / 12 for Laplace, 0 for Yukawa
+  double quad = 0.0;    // 2 pi / 3V of the unit cell (cube: V = 8, pi / 12) for Laplace, 0 for Yukawa
+  double shape[3] = {1.0, 1.0, 1.0};
 };
-std::shared_ptr<const LatticeTable> lattice_table(const KernelSpec &unit_kernel, int p);
+std::shared_ptr<const LatticeTable> lattice_table(const KernelSpec &unit_kernel, int p,
+                                                  const double *shape = nullptr);
 
-// Periodic Green's function of the unit cell (period 2) and its gradient, r in unit
-// coordinates; `regular` subtracts the bare kernel of the n = 0 term (finite at r = 0).
+// Periodic Green's function of the unit cell (period 2; shape: periods 2 shape[d]) and its
+// gradient, r in unit coordinates; `regular` subtracts the bare kernel of the n = 0 term (finite at r = 0).
 // Laplace includes the background constant. For tests and the reference sum.
 void periodic_green_unit(const KernelSpec &unit_kernel, const double r[3], bool regular,
-                         double &value, double grad[3]);
+                         double &value, double grad[3], const double *shape = nullptr);
 
 // Exact periodic reference with the engine's conventions (pairs at r = 0 skip only the bare
 // n = 0 term; their images and the background are included): Ewald (real space + structure
-// factors), O(N M) + O((N + M) K). Cubic cell [center - h, center + h)^3.
+// factors), O(N M) + O((N + M) K). Cell [center - h, center + h)^3, or with shape the box
+// [center - h shape, center + h shape).
 void periodic_direct_sum(const KernelSpec &kernel, const double center[3], double half_width,
                          std::size_t n_src, const double *src_xyz, const double *src_q,
-                         std::size_t n_trg, const double *trg_xyz, double *pot, double *grad);
+                         std::size_t n_trg, const double *trg_xyz, double *pot, double *grad,
+                         const double *shape = nullptr);
 
 }    // namespace kifmm

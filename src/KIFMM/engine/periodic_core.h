@@ -28,6 +28,16 @@ template <class K> void FmmEvaluator<K>::set_root(const double center[3], double
   opt_.fixed_root = true;
   for (int d = 0; d < 3; ++d) opt_.root_center[d] = center[d];
   opt_.root_half_width = half_width;
+  for (int d = 0; d < 3; ++d) opt_.root_shape[d] = 1.0;
+}
+
+template <class K> void FmmEvaluator<K>::set_root_box(const double center[3], const double half_widths[3])
+{
+  const double h = std::max(half_widths[0], std::max(half_widths[1], half_widths[2]));
+  if (!(h > 0) || !(std::min(half_widths[0], std::min(half_widths[1], half_widths[2])) > 0))
+    throw std::invalid_argument("kifmm: the root box needs positive half-widths");
+  set_root(center, h);
+  for (int d = 0; d < 3; ++d) opt_.root_shape[d] = half_widths[d] == h ? 1.0 : half_widths[d] / h;
 }
 
 template <class K>
@@ -36,12 +46,12 @@ void FmmEvaluator<K>::periodic_wrap(std::size_t ns, const double *&sxyz, std::si
   if (!opt_.fixed_root || !(opt_.root_half_width > 0))
     throw std::invalid_argument("kifmm: periodic evaluation needs the periodic cell as fixed root");
   const bool same = sxyz == txyz && ns == nt;
-  wrap_into_cell(ns, sxyz, opt_.root_center, opt_.root_half_width, pwrap_src_);
+  wrap_into_cell(ns, sxyz, opt_.root_center, opt_.root_half_width, pwrap_src_, opt_.root_shape);
   sxyz = pwrap_src_.data();
   if (same) {
     txyz = sxyz;
   } else {
-    wrap_into_cell(nt, txyz, opt_.root_center, opt_.root_half_width, pwrap_trg_);
+    wrap_into_cell(nt, txyz, opt_.root_center, opt_.root_half_width, pwrap_trg_, opt_.root_shape);
     txyz = pwrap_trg_.data();
   }
 }
@@ -87,7 +97,7 @@ template <class K> void FmmEvaluator<K>::periodic_far(std::size_t own_sources, C
 template <class K> void FmmEvaluator<K>::periodic_image_p2l()
 {
   const auto &cells = tree_.cells;
-  const double L = 2.0 * tree_.root.half_width;
+  const double L[3] = {tree_.period(0), tree_.period(1), tree_.period(2)};
   const int n = (int) cells.size();
 #pragma omp parallel
   {
@@ -104,9 +114,9 @@ template <class K> void FmmEvaluator<K>::periodic_image_p2l()
       for (int e = plists_.X.begin(b); e < plists_.X.end(b); ++e) {
         const signed char *s = plists_.X.shift_of(e);
         for (int i = 0; i < nsurf_; ++i) {
-          x[i] = surf.x[i] - s[0] * L;
-          y[i] = surf.y[i] - s[1] * L;
-          z[i] = surf.z[i] - s[2] * L;
+          x[i] = surf.x[i] - s[0] * L[0];
+          y[i] = surf.y[i] - s[1] * L[1];
+          z[i] = surf.z[i] - s[2] * L[2];
         }
         const Cell &A = cells[plists_.X.idx[e]];
         p2p<K, true, false, false>(k_, {(std::size_t) nsurf_, x.data(), y.data(), z.data()}, source_span(A), {chk});
@@ -125,7 +135,7 @@ template <class K> void FmmEvaluator<K>::periodic_root_operator()
   else if constexpr (!std::is_same_v<K, LaplaceKernel>)
     throw std::invalid_argument("kifmm: periodic boundaries need a Laplace or Yukawa kernel");
   const double t0 = omp_get_wtime();
-  lattice_ = lattice_table(unit, p_);
+  lattice_ = lattice_table(unit, p_, tree_.root.shape);
   stats_.t_precompute += omp_get_wtime() - t0;
   const int p = p_, m = 2 * p - 1;
   if (plattice_.size() != 3 * (std::size_t) nsurf_) plattice_ = surface_lattice(p);
@@ -383,7 +393,7 @@ std::vector<const double *> FmmEvaluator<K>::periodic_top_kernels(int l, const s
 template <class K> void FmmEvaluator<K>::periodic_near(bool want_pot)
 {
   const auto &cells = tree_.cells;
-  const double L = 2.0 * tree_.root.half_width;
+  const double L[3] = {tree_.period(0), tree_.period(1), tree_.period(2)};
   const int nleaf = (int) tree_.leaves.size();
   const double t_begin = omp_get_wtime();
   if (plists_.mutual) {    // each leaf with itself, then the pairs of adjacent leaves color by color
@@ -406,9 +416,9 @@ template <class K> void FmmEvaluator<K>::periodic_near(bool want_pot)
       // targets moved by -shift * L see the sources of the image at +shift * L
       auto shifted = [&](const signed char *s) {
         for (std::size_t i = 0; i < nt; ++i) {
-          x[i] = tx_[t0 + i] - s[0] * L;
-          y[i] = ty_[t0 + i] - s[1] * L;
-          z[i] = tz_[t0 + i] - s[2] * L;
+          x[i] = tx_[t0 + i] - s[0] * L[0];
+          y[i] = ty_[t0 + i] - s[1] * L[1];
+          z[i] = tz_[t0 + i] - s[2] * L[2];
         }
       };
       const PointSpan trg{nt, x.data(), y.data(), z.data(), nullptr};

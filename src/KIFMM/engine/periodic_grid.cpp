@@ -38,7 +38,7 @@ void grid_free(std::complex<double> *z)
 
 void grid_convolve(const GridKernel &g, std::complex<double> *z, int f0, int f1)
 {
-  const std::size_t kc = (std::size_t) g.k * g.k * g.k, nf = g.nfreq;
+  const std::size_t kc = (std::size_t) g.cells[0] * g.cells[1] * g.cells[2], nf = g.nfreq;
   for (int f = f0; f < f1; f += 16) {
     auto *col = reinterpret_cast<fftw_complex *>(z + f);
     fftw_execute_dft((fftw_plan) g.plan_fwd, col, col);
@@ -53,84 +53,104 @@ void grid_convolve(const GridKernel &g, std::complex<double> *z, int f0, int f1)
 
 namespace {
 
-// Values of K_D (periodic_grid.h) in unit-grid coordinates at every r = 2 D + i dx, D the
-// class representative in (-k/2, k/2]^3, i in [-(p-1), p-1]^3: a tensor grid of k (2p - 1)
-// coordinates per axis. G_per(r) = G_per,unit(r / k) / k (period 2k), by the Ewald split of
-// the unit cell: real-space terms (the excluded near images in regular form, -erf / rho),
-// the reciprocal sum (separable on the tensor grid: three contractions) and the background.
-std::vector<double> grid_kernel_values(const KernelSpec &unit, int k, int p)
+// Values of K_D (periodic_grid.h) in unit-grid coordinates (cell half-widths cs_d, largest 1)
+// at every r_d = (2 D_d + i dx) cs_d, D the class representative in (-k_d/2, k_d/2], i in
+// [-(p-1), p-1]: a tensor grid of k_d (2p - 1) coordinates along axis d. With K the largest
+// periodic half-width k_d cs_d, G_per(r) = G_per,unit(r / K) / K, by the Ewald split of the
+// unit cell of half-widths k_d cs_d / K: real-space terms (the excluded near images in regular
+// form, -erf / rho), the reciprocal sum (separable on the tensor grid: three contractions) and
+// the background. v[(x * nc1 + y) * nc2 + z].
+std::vector<double> grid_kernel_values(const KernelSpec &unit, const int k[3], int p, const double cs[3])
 {
-  const Split s(unit);
-  const int m = 2 * p - 1, nc = k * m;
+  double K = 0, box[3];
+  for (int d = 0; d < 3; ++d) K = std::max(K, k[d] * cs[d]);
+  for (int d = 0; d < 3; ++d) box[d] = k[d] * cs[d] == K ? 1.0 : k[d] * cs[d] / K;
+  const Split s(unit, box);
+  const int m = 2 * p - 1;
+  const int nc[3] = {k[0] * m, k[1] * m, k[2] * m};
   const double dx = p > 1 ? 2.0 * kRadiusInner / (p - 1) : 0.0;
-  std::vector<int> rep(nc);    // class representative of each 1D coordinate
-  std::vector<double> u(nc);   // unit-cell coordinate (r / k)
-  for (int a = 0; a < k; ++a)
-    for (int i = 0; i < m; ++i) {
-      const int D = grid_class_representative(a, k);
-      rep[a * m + i] = D;
-      u[a * m + i] = (2.0 * D + (i - (p - 1)) * dx) / k;
-    }
-  // reciprocal sum Re sum_m W(|m|^2) e^{i pi m.u}
-  const int K = s.kmax, M = 2 * K + 1;
-  std::vector<std::complex<double>> E((std::size_t) nc * M);
-  for (int c = 0; c < nc; ++c)
-    for (int q = 0; q < M; ++q) E[(std::size_t) c * M + q] = std::polar(1.0, kPi * (q - K) * u[c]);
-  std::vector<double> W((std::size_t) M * M * M);
-  for (int a = 0; a < M; ++a)
-    for (int b = 0; b < M; ++b)
-      for (int c = 0; c < M; ++c) {
-        const int m2 = (a - K) * (a - K) + (b - K) * (b - K) + (c - K) * (c - K);
-        W[((std::size_t) a * M + b) * M + c] = m2 > K * K ? 0.0 : s.weight(m2);
+  std::vector<int> rep[3];     // class representative of each 1D coordinate
+  std::vector<double> u[3];    // unit-cell coordinate (r / K)
+  for (int d = 0; d < 3; ++d) {
+    rep[d].resize(nc[d]);
+    u[d].resize(nc[d]);
+    for (int a = 0; a < k[d]; ++a)
+      for (int i = 0; i < m; ++i) {
+        const int D = grid_class_representative(a, k[d]);
+        rep[d][a * m + i] = D;
+        u[d][a * m + i] = (2.0 * D + (i - (p - 1)) * dx) * cs[d] / K;
       }
-  std::vector<std::complex<double>> A((std::size_t) M * M * nc), B((std::size_t) M * nc * nc);
+  }
+  // reciprocal sum Re sum_m W(k) e^{i k.u}, k_d = pi m_d / box_d
+  int Km[3], M[3];
+  std::vector<std::complex<double>> E[3];
+  for (int d = 0; d < 3; ++d) {
+    Km[d] = s.direct ? 0 : s.kmax_axis(d);
+    M[d] = 2 * Km[d] + 1;
+    E[d].resize((std::size_t) nc[d] * M[d]);
+    for (int c = 0; c < nc[d]; ++c)
+      for (int q = 0; q < M[d]; ++q)
+        E[d][(std::size_t) c * M[d] + q] = std::polar(1.0, kPi * (q - Km[d]) * u[d][c] / box[d]);
+  }
+  std::vector<double> W((std::size_t) M[0] * M[1] * M[2]);
+  for (int a = 0; a < M[0]; ++a)
+    for (int b = 0; b < M[1]; ++b)
+      for (int c = 0; c < M[2]; ++c) {
+        const int mv[3] = {a - Km[0], b - Km[1], c - Km[2]};
+        W[((std::size_t) a * M[1] + b) * M[2] + c] = s.k_inside(mv) ? s.weight_k2(s.k2_of(mv)) : 0.0;
+      }
+  std::vector<std::complex<double>> A((std::size_t) M[0] * M[1] * nc[2]), B((std::size_t) M[0] * nc[1] * nc[2]);
 #pragma omp parallel for schedule(static)
-  for (int ab = 0; ab < M * M; ++ab)
-    for (int z = 0; z < nc; ++z) {
+  for (int ab = 0; ab < M[0] * M[1]; ++ab)
+    for (int z = 0; z < nc[2]; ++z) {
       std::complex<double> acc = 0;
-      for (int c = 0; c < M; ++c) acc += W[(std::size_t) ab * M + c] * E[(std::size_t) z * M + c];
-      A[(std::size_t) ab * nc + z] = acc;
+      for (int c = 0; c < M[2]; ++c) acc += W[(std::size_t) ab * M[2] + c] * E[2][(std::size_t) z * M[2] + c];
+      A[(std::size_t) ab * nc[2] + z] = acc;
     }
 #pragma omp parallel for schedule(static)
-  for (int a = 0; a < M; ++a)
-    for (int y = 0; y < nc; ++y)
-      for (int z = 0; z < nc; ++z) {
+  for (int a = 0; a < M[0]; ++a)
+    for (int y = 0; y < nc[1]; ++y)
+      for (int z = 0; z < nc[2]; ++z) {
         std::complex<double> acc = 0;
-        for (int b = 0; b < M; ++b) acc += E[(std::size_t) y * M + b] * A[((std::size_t) a * M + b) * nc + z];
-        B[((std::size_t) a * nc + y) * nc + z] = acc;
+        for (int b = 0; b < M[1]; ++b)
+          acc += E[1][(std::size_t) y * M[1] + b] * A[((std::size_t) a * M[1] + b) * nc[2] + z];
+        B[((std::size_t) a * nc[1] + y) * nc[2] + z] = acc;
       }
-  std::vector<double> v((std::size_t) nc * nc * nc);
-  const double quad_unit = s.yukawa ? 0.0 : 2 * kPi / (3 * kVolume);
+  std::vector<double> v((std::size_t) nc[0] * nc[1] * nc[2]);
+  const double quad_unit = s.yukawa ? 0.0 : 2 * kPi / (3 * s.volume);
+  const double cut = s.real_cut();
 #pragma omp parallel for schedule(dynamic, 1)
-  for (int x = 0; x < nc; ++x)
-    for (int y = 0; y < nc; ++y)
-      for (int z = 0; z < nc; ++z) {
+  for (int x = 0; x < nc[0]; ++x)
+    for (int y = 0; y < nc[1]; ++y)
+      for (int z = 0; z < nc[2]; ++z) {
         std::complex<double> acc = 0;
-        for (int a = 0; a < M; ++a) acc += E[(std::size_t) x * M + a] * B[((std::size_t) a * nc + y) * nc + z];
+        for (int a = 0; a < M[0]; ++a)
+          acc += E[0][(std::size_t) x * M[0] + a] * B[((std::size_t) a * nc[1] + y) * nc[2] + z];
         double val = acc.real() + s.background();
-        const double r[3] = {u[x], u[y], u[z]};
-        const int D[3] = {rep[x], rep[y], rep[z]};
+        const double r[3] = {u[0][x], u[1][y], u[2][z]};
+        const int D[3] = {rep[0][x], rep[1][y], rep[2][z]};
         // images within the real-space cutoff per axis, and the excluded ones (n = 0 there:
         // |D| <= k/2 and k >= 3 make |D + k n| <= 1 impossible for n != 0)
-        int cand[3][5], nc3[3] = {0, 0, 0};
-        for (int c = 0; c < 3; ++c)
-          for (int q = -2; q <= 2; ++q)
-            if (s.direct || std::abs(r[c] + kPeriod * q) <= kRealCut || std::abs(D[c] + k * q) <= 1)
-              cand[c][nc3[c]++] = q;
-        for (int ix = 0; ix < nc3[0]; ++ix)
-          for (int iy = 0; iy < nc3[1]; ++iy)
-            for (int iz = 0; iz < nc3[2]; ++iz) {
-              const int n[3] = {cand[0][ix], cand[1][iy], cand[2][iz]};
+        std::vector<int> cand[3];
+        for (int c = 0; c < 3; ++c) {
+          const int Q = s.images(c, std::fabs(r[c]));
+          for (int q = -Q; q <= Q; ++q)
+            if (std::abs(r[c] + s.period[c] * q) <= cut || std::abs(D[c] + k[c] * q) <= 1) cand[c].push_back(q);
+        }
+        for (int n0 : cand[0])
+          for (int n1 : cand[1])
+            for (int n2 : cand[2]) {
+              const int n[3] = {n0, n1, n2};
               bool excluded = true;    // the image is adjacent to the target cell
               double d2 = 0;
               for (int c = 0; c < 3; ++c) {
-                excluded = excluded && std::abs(D[c] + k * n[c]) <= 1;
-                const double d = r[c] + kPeriod * n[c];
+                excluded = excluded && std::abs(D[c] + k[c] * n[c]) <= 1;
+                const double d = r[c] + s.period[c] * n[c];
                 d2 += d * d;
               }
               const double rho = std::sqrt(d2);
               if (s.direct) {    // direct image sum (Yukawa, kappa >= 10): the excluded terms are left out
-                if (excluded) continue;
+                if (excluded || rho > cut) continue;
                 double t, F;
                 s.real(rho, false, t, F);
                 val += t;
@@ -140,34 +160,42 @@ std::vector<double> grid_kernel_values(const KernelSpec &unit, int k, int p)
                 val += s.reg0();
                 continue;
               }
-              if (!excluded && rho > kRealCut) continue;
+              if (!excluded && rho > cut) continue;
               double t, F;
               s.real(rho, excluded, t, F);
               val += t;
             }
         val -= quad_unit * (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-        v[((std::size_t) x * nc + y) * nc + z] = val / k;
+        v[((std::size_t) x * nc[1] + y) * nc[2] + z] = val / K;
       }
   return v;
 }
 
-std::shared_ptr<GridKernel> compute_grid_kernel(const KernelSpec &unit, int k, int p)
+std::shared_ptr<GridKernel> compute_grid_kernel(const KernelSpec &unit, const int k[3], int p, const double cs[3])
 {
-  if (k < 3) throw std::invalid_argument("kifmm: a periodic grid needs at least 3 cells per side");
+  if (std::min(k[0], std::min(k[1], k[2])) < 3)
+    throw std::invalid_argument("kifmm: a periodic grid needs at least 3 cells per side");
   auto g = std::make_shared<GridKernel>();
-  g->k = k;
+  g->k = k[0];
+  double V = 1.0;
+  for (int d = 0; d < 3; ++d) {
+    g->cells[d] = k[d];
+    g->cell_shape[d] = cs[d];
+    V *= 2.0 * k[d] * cs[d];
+  }
   g->p = p;
   g->nraw = m2l_nfreq_raw(p);
   g->nfreq = m2l_nfreq(p);
-  g->quad = unit.type == KernelType::Yukawa ? 0.0 : 2 * kPi / (3.0 * (2.0 * k) * (2.0 * k) * (2.0 * k));
-  const int n = m2l_grid_n(p), m = 2 * p - 1, nc = k * m;
-  const std::size_t kc = (std::size_t) k * k * k;
-  const std::vector<double> v = grid_kernel_values(unit, k, p);
+  g->quad = unit.type == KernelType::Yukawa ? 0.0 : 2 * kPi / (3.0 * V);
+  const int n = m2l_grid_n(p), m = 2 * p - 1;
+  const int nc1 = k[1] * m, nc2 = k[2] * m;
+  const std::size_t kc = (std::size_t) k[0] * k[1] * k[2];
+  const std::vector<double> v = grid_kernel_values(unit, k, p, cs);
   std::complex<double> *z = grid_alloc((std::size_t) g->nfreq * kc);
   std::fill(z, z + (std::size_t) g->nfreq * kc, std::complex<double>(0.0));
   {
     std::lock_guard<std::mutex> lock(fftw_mutex());
-    const int dims[3] = {k, k, k};
+    const int dims[3] = {k[0], k[1], k[2]};
     auto *zz = reinterpret_cast<fftw_complex *>(z);
     const int nf = g->nfreq;    // 16 contiguous frequencies of every cell, cells nf apart
     g->plan_fwd = fftw_plan_many_dft(3, dims, 16, zz, nullptr, nf, 1, zz, nullptr, nf, 1, FFTW_FORWARD, FFTW_ESTIMATE);
@@ -188,14 +216,14 @@ std::shared_ptr<GridKernel> compute_grid_kernel(const KernelSpec &unit, int k, i
     }
 #pragma omp for schedule(dynamic, 1)
     for (int cls = 0; cls < (int) kc; ++cls) {
-      const int a[3] = {cls / (k * k), (cls / k) % k, cls % k};
+      const int a[3] = {cls / (k[1] * k[2]), (cls / k[2]) % k[1], cls % k[2]};
       std::fill(grid, grid + (std::size_t) n * n * n, 0.0);
       for (int i = 0; i < m; ++i)
         for (int j = 0; j < m; ++j)
           for (int l = 0; l < m; ++l) {
             const int gi = (i - (p - 1) + n) % n, gj = (j - (p - 1) + n) % n, gl = (l - (p - 1) + n) % n;
             grid[((std::size_t) gi * n + gj) * n + gl] =
-                v[((std::size_t) (a[0] * m + i) * nc + a[1] * m + j) * nc + a[2] * m + l];
+                v[((std::size_t) (a[0] * m + i) * nc1 + a[1] * m + j) * nc2 + a[2] * m + l];
           }
       fftw_execute_dft_r2c(plan, grid, spec);
       for (int f = 0; f < g->nraw; ++f) z[(std::size_t) cls * g->nfreq + f] = std::complex<double>(spec[f][0], spec[f][1]) * norm;
@@ -216,18 +244,23 @@ std::shared_ptr<GridKernel> compute_grid_kernel(const KernelSpec &unit, int k, i
 
 }    // namespace
 
-std::shared_ptr<const GridKernel> periodic_grid_kernel(const KernelSpec &unit, int k, int p)
+std::shared_ptr<const GridKernel> periodic_grid_kernel(const KernelSpec &unit, const int cells[3], int p,
+                                                       const double *cell_shape)
 {
   (void) fftw_mutex();    // constructed before the cache below, so destroyed after it (~GridKernel locks it)
   static std::mutex mtx;
-  static std::map<std::tuple<double, int, int>, std::shared_ptr<const GridKernel>> cache;
-  const double key = unit.type == KernelType::Yukawa ? unit.kappa : -1.0;
-  std::lock_guard<std::mutex> lock(mtx);    // one computation per (kernel, k, p), others wait for it
-  auto it = cache.find({key, k, p});
+  using Key = std::tuple<double, int, int, int, int, double, double, double>;
+  static std::map<Key, std::shared_ptr<const GridKernel>> cache;
+  const double one[3] = {1.0, 1.0, 1.0};
+  const double *cs = cell_shape ? cell_shape : one;
+  const Key key{unit.type == KernelType::Yukawa ? unit.kappa : -1.0, cells[0], cells[1], cells[2], p,
+                cs[0], cs[1], cs[2]};
+  std::lock_guard<std::mutex> lock(mtx);    // one computation per key, others wait for it
+  auto it = cache.find(key);
   if (it != cache.end()) return it->second;
-  if (cache.size() > 16) cache.clear();    // yukawa boxes that keep changing size
-  auto g = compute_grid_kernel(unit, k, p);
-  cache[{key, k, p}] = g;
+  if (cache.size() > 16) cache.clear();    // boxes that keep changing size (yukawa) or shape
+  auto g = compute_grid_kernel(unit, cells, p, cs);
+  cache[key] = g;
   return g;
 }
 

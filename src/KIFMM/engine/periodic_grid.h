@@ -1,5 +1,6 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
-// Periodic (p p p) evaluation on ONE level of k^3 cubic cells (k >= 3 per side), the cheaper
+// Periodic (p p p) evaluation on ONE level of k^3 cubic cells (k >= 3 per side), or in a
+// rectangular periodic cell kx x ky x kz nearly cubic cells (grid_cells_per_axis), the cheaper
 // choice for small N (about 1e3 .. 3e4 atoms, see cost_model.h): the octree's 4 or 8 leaves
 // per side leave either too many atoms per leaf (near field) or too many M2L translations;
 // 5, 6, 7 ... per side fill the gap. Laplace and Yukawa.
@@ -38,9 +39,11 @@ namespace kifmm {
 // (DFT of the offset class D = t - s mod k), surface frequency f (r2c of the (2p)^3 lattice,
 // f = nraw .. nfreq-1 zero), divided by (2p)^3 k^3 (normalizes both inverse transforms).
 struct GridKernel {
-  int k = 0, p = 0, nraw = 0, nfreq = 0;
+  int k = 0, p = 0, nraw = 0, nfreq = 0;    // k: cells along the first axis (cubes: per side)
+  int cells[3] = {0, 0, 0};                 // cells per axis
+  double cell_shape[3] = {1.0, 1.0, 1.0};   // a cell's half-widths (largest 1)
   std::vector<std::complex<double>> hat;
-  double quad = 0.0;    // quadratic part of G_per in unit-grid coordinates: 2 pi / (3 (2k)^3)
+  double quad = 0.0;    // quadratic part of G_per in unit-grid coordinates: 2 pi / (3 V), V = (2k)^3 for cubes
   void *plan_fwd = nullptr, *plan_bwd = nullptr;    // DFTs over the cells of 16 frequency rows
   GridKernel() = default;
   GridKernel(const GridKernel &) = delete;
@@ -49,14 +52,46 @@ struct GridKernel {
   std::size_t bytes() const { return hat.size() * sizeof(std::complex<double>); }
 };
 
-// Cell index (a0 k + a1) k + a2 of a point of the cell [c - H, c + H)^3 in the grid of k^3
-// cells (points on the upper faces or outside are clamped into the boundary cells).
+// Cells per axis of the grid with k cells along the longest axis of a periodic cell of this
+// shape (RootBox::shape, largest 1; null or a cube: k k k): round(k shape[d]), at least 3.
+inline void grid_cells_per_axis(int k, const double *shape, int cells[3])
+{
+  for (int d = 0; d < 3; ++d) cells[d] = shape ? std::max(3, (int) std::lround(k * shape[d])) : k;
+}
+// Half-widths of one cell (largest 1) and the largest one's length in units of the periodic
+// cell's half-width H: cell d has half-width H shape[d] / cells[d].
+inline double grid_cell_shape(const int cells[3], const double *shape, double cell_shape[3])
+{
+  double w[3], m = 0;
+  for (int d = 0; d < 3; ++d) m = std::max(m, w[d] = (shape ? shape[d] : 1.0) / cells[d]);
+  for (int d = 0; d < 3; ++d) cell_shape[d] = w[d] == m ? 1.0 : w[d] / m;
+  return m;
+}
+// Longest over shortest cell edge (1: cubic cells). The choice offers grids whose cells are
+// within max_cell_aspect (kifmm.h).
+inline double grid_cell_aspect(const int cells[3], const double *shape)
+{
+  double cs[3];
+  grid_cell_shape(cells, shape, cs);
+  return 1.0 / std::min(cs[0], std::min(cs[1], cs[2]));
+}
+
+// Cell index (a0 ky + a1) kz + a2 of a point of the cell [c - H shape, c + H shape) in the grid
+// of cells[0] x cells[1] x cells[2] cells (points on the upper faces or outside are clamped into
+// the boundary cells; shape null: a cube).
+inline int grid_cell_index(const double x[3], const double c[3], double H, const double *shape, const int cells[3])
+{
+  int a[3];
+  for (int d = 0; d < 3; ++d) {
+    const double hd = H * (shape ? shape[d] : 1.0), w = 2.0 * hd / cells[d];
+    a[d] = std::min(cells[d] - 1, std::max(0, (int) std::floor((x[d] - (c[d] - hd)) / w)));
+  }
+  return (a[0] * cells[1] + a[1]) * cells[2] + a[2];
+}
 inline int grid_cell_index(const double x[3], const double c[3], double H, int k)
 {
-  const double w = 2.0 * H / k;
-  int a[3];
-  for (int d = 0; d < 3; ++d) a[d] = std::min(k - 1, std::max(0, (int) std::floor((x[d] - (c[d] - H)) / w)));
-  return (a[0] * k + a[1]) * k + a[2];
+  const int cells[3] = {k, k, k};
+  return grid_cell_index(x, c, H, nullptr, cells);
 }
 
 // Representative in (-k/2, k/2] of the cell offset class a mod k (the nearest image)
@@ -68,21 +103,34 @@ inline int grid_class_representative(int a, int k)
 
 // The cell at offset (dx, dy, dz) in {-1,0,1}^3 of cell b, periodically; sh: the root shift of
 // that image (-1, 0 or 1 per axis).
-inline int grid_neighbour_cell(int b, int k, int dx, int dy, int dz, signed char sh[3])
+inline int grid_neighbour_cell(int b, const int cells[3], int dx, int dy, int dz, signed char sh[3])
 {
-  const int a[3] = {b / (k * k) + dx, (b / k) % k + dy, b % k + dz};
+  const int a[3] = {b / (cells[1] * cells[2]) + dx, (b / cells[2]) % cells[1] + dy, b % cells[2] + dz};
   int w[3];
   for (int d = 0; d < 3; ++d) {
-    sh[d] = (signed char) (a[d] < 0 ? -1 : a[d] >= k ? 1 : 0);
-    w[d] = a[d] - sh[d] * k;
+    sh[d] = (signed char) (a[d] < 0 ? -1 : a[d] >= cells[d] ? 1 : 0);
+    w[d] = a[d] - sh[d] * cells[d];
   }
-  return (w[0] * k + w[1]) * k + w[2];
+  return (w[0] * cells[1] + w[1]) * cells[2] + w[2];
+}
+inline int grid_neighbour_cell(int b, int k, int dx, int dy, int dz, signed char sh[3])
+{
+  const int cells[3] = {k, k, k};
+  return grid_neighbour_cell(b, cells, dx, dy, dz, sh);
 }
 
-// Cached per (kernel, k, p) in the process (a few tenths of a second to compute at p = 6,
-// k = 5). `unit`: the kernel of the unit cell (half-width 1), Laplace or Yukawa with
-// kappa * H (H the half-width of the periodic cell), as lattice_table (periodic.h).
-std::shared_ptr<const GridKernel> periodic_grid_kernel(const KernelSpec &unit, int k, int p);
+// Cached per (kernel, cells, cell shape, p) in the process (a few tenths of a second to
+// compute at p = 6, k = 5). `unit`: the kernel of the unit cell (half-width 1), Laplace or
+// Yukawa with kappa * H (H the largest half-width of the periodic cell), as lattice_table
+// (periodic.h). cell_shape: the half-widths of a cell (largest 1; null: cubic cells), whose
+// largest is 1 in unit-grid coordinates.
+std::shared_ptr<const GridKernel> periodic_grid_kernel(const KernelSpec &unit, const int cells[3], int p,
+                                                       const double *cell_shape);
+inline std::shared_ptr<const GridKernel> periodic_grid_kernel(const KernelSpec &unit, int k, int p)
+{
+  const int cells[3] = {k, k, k};
+  return periodic_grid_kernel(unit, cells, p, nullptr);
+}
 
 // In place on the frequencies [f0, f1) (multiples of 16) of z[cell * nfreq + f] (cell-major,
 // so that each cell's spectrum is contiguous): z <- IDFT(hat .* DFT(z)) over the cells.

@@ -47,9 +47,8 @@ void FmmEvaluator<K>::evaluate_grid_distributed(Communicator &comm, std::size_t 
     throw std::invalid_argument("kifmm: the periodic grid (Options::periodic_grid) is for the Laplace and Yukawa kernels");
   } else {
     const double t0 = omp_get_wtime();
-    const int k = opt_.periodic_grid;
-    if (k < 3) throw std::invalid_argument("kifmm: Options::periodic_grid needs at least 3 cells per side");
-    const int kc = k * k * k;
+    const GridGeometry g = grid_geometry();
+    const int kc = g.kc;
     // own targets' cells, all-gathered
     std::vector<char> mine(kc, 0);
     for (std::size_t i = 0; i < n; ++i) mine[grid_cell_of(xyz + 3 * i)] = 1;
@@ -116,12 +115,16 @@ void FmmEvaluator<K>::evaluate_grid_distributed(Communicator &comm, std::size_t 
 
 template <class K> int FmmEvaluator<K>::grid_cell_of(const double *x) const
 {
-  return grid_cell_index(x, opt_.root_center, opt_.root_half_width, opt_.periodic_grid);
+  int cells[3];
+  grid_cells_per_axis(opt_.periodic_grid, opt_.root_shape, cells);
+  return grid_cell_index(x, opt_.root_center, opt_.root_half_width, opt_.root_shape, cells);
 }
 
 template <class K> int FmmEvaluator<K>::grid_neighbour(int b, int dx, int dy, int dz, signed char sh[3]) const
 {
-  return grid_neighbour_cell(b, opt_.periodic_grid, dx, dy, dz, sh);
+  int cells[3];
+  grid_cells_per_axis(opt_.periodic_grid, opt_.root_shape, cells);
+  return grid_neighbour_cell(b, cells, dx, dy, dz, sh);
 }
 
 // Points sorted by cell (stable counting sort: within a cell the input order, so the own
@@ -130,11 +133,13 @@ template <class K>
 void FmmEvaluator<K>::grid_bin(std::size_t ns, const double *sxyz, const double *sq, std::size_t nt,
                                const double *txyz, bool same_points, std::size_t own_sources)
 {
-  const int k = opt_.periodic_grid;
-  if (k < 3) throw std::invalid_argument("kifmm: Options::periodic_grid needs at least 3 cells per side");
-  const int kc = k * k * k;
+  const GridGeometry g = grid_geometry();
+  const int kc = g.kc;
   tree_ = Octree{};
-  for (int d = 0; d < 3; ++d) tree_.root.center[d] = opt_.root_center[d];
+  for (int d = 0; d < 3; ++d) {
+    tree_.root.center[d] = opt_.root_center[d];
+    tree_.root.shape[d] = opt_.root_shape[d];
+  }
   tree_.root.half_width = opt_.root_half_width;
   auto bin = [&](std::size_t n, const double *xyz, std::vector<int> &begin, std::vector<uint32_t> &order) {
     std::vector<int> cell(n);
@@ -164,19 +169,22 @@ void FmmEvaluator<K>::grid_bin(std::size_t ns, const double *sxyz, const double 
 template <class K> typename FmmEvaluator<K>::GridGeometry FmmEvaluator<K>::grid_geometry() const
 {
   GridGeometry g;
-  g.k = opt_.periodic_grid;
-  g.kc = g.k * g.k * g.k;
+  if (opt_.periodic_grid < 3) throw std::invalid_argument("kifmm: Options::periodic_grid needs at least 3 cells per side");
+  grid_cells_per_axis(opt_.periodic_grid, opt_.root_shape, g.k);
+  g.kc = g.k[0] * g.k[1] * g.k[2];
   g.H = opt_.root_half_width;
-  g.w = 2.0 * g.H / g.k;
-  g.h = 0.5 * g.w;
-  g.L = 2.0 * g.H;
+  g.h = g.H * grid_cell_shape(g.k, opt_.root_shape, g.cs);
+  for (int d = 0; d < 3; ++d) {
+    g.L[d] = 2.0 * g.H * opt_.root_shape[d];
+    g.w[d] = g.L[d] / g.k[d];
+  }
   return g;
 }
 
 template <class K> void FmmEvaluator<K>::grid_center(const GridGeometry &g, int b, double ctr[3]) const
 {
-  const int a[3] = {b / (g.k * g.k), (b / g.k) % g.k, b % g.k};
-  for (int d = 0; d < 3; ++d) ctr[d] = opt_.root_center[d] - g.H + (a[d] + 0.5) * g.w;
+  const int a[3] = {b / (g.k[1] * g.k[2]), (b / g.k[2]) % g.k[1], b % g.k[2]};
+  for (int d = 0; d < 3; ++d) ctr[d] = opt_.root_center[d] - 0.5 * g.L[d] + (a[d] + 0.5) * g.w[d];
 }
 
 template <class K> void FmmEvaluator<K>::grid_reduce(Communicator *comm, double *v, std::size_t m)
@@ -242,13 +250,18 @@ void FmmEvaluator<K>::grid_passes(Communicator *comm, std::size_t own_sources, b
 template <class K> void FmmEvaluator<K>::grid_operators(const GridGeometry &g)
 {
   double t_setup = 0, s = 1.0;
-  ops_.assign(1, get_operator_set(make_unit_kernel(k_, g.h, s), p_, opt_.cache_dir, &t_setup));
+  // cells of the grid's shape (rectangular periodic cells: nearly cubic ones, in memory only)
+  const UnitKernel uk = make_unit_kernel(k_, g.h, s, g.cs);
+  ops_.assign(1, get_operator_set(uk, p_, uk.cubic() ? opt_.cache_dir : std::string(), &t_setup));
+  RootBox cell;
+  for (int d = 0; d < 3; ++d) cell.shape[d] = g.cs[d];
+  shape_surfaces(cell);
   scale_.assign(1, s);
   if (!fft_ || fft_->p() != p_) fft_ = std::make_unique<M2LTransform>(p_);
   const double tg = omp_get_wtime();
   KernelSpec unit;    // Laplace, or Yukawa with kappa * H (unit cell)
   if constexpr (std::is_same_v<K, YukawaKernel>) unit = KernelSpec{KernelType::Yukawa, k_.kappa * g.H};
-  grid_kernel_ = periodic_grid_kernel(unit, g.k, p_);
+  grid_kernel_ = periodic_grid_kernel(unit, g.k, p_, g.cs);
   stats_.t_precompute = t_setup + (omp_get_wtime() - tg);
   stats_.operator_bytes = ops_[0]->bytes() + grid_kernel_->bytes();
 }
@@ -371,7 +384,7 @@ template <class K> std::size_t FmmEvaluator<K>::grid_near_mutual(const GridGeome
   }
   stats_.mutual_pairs = pairs.size();
   return run_mutual_tasks(g.kc, self, pairs, [&](int a, int b, const signed char *sh, bool self_pair) {
-    const double d[3] = {sh[0] * g.L, sh[1] * g.L, sh[2] * g.L};
+    const double d[3] = {sh[0] * g.L[0], sh[1] * g.L[1], sh[2] * g.L[2]};
     const MutualSpan sa{source_range(sb[a], sb[a + 1] - sb[a]), result_at(sb[a])},
         sbb{source_range(sb[b], sb[b + 1] - sb[b]), result_at(sb[b])};
     std::size_t z0 = 0;
@@ -386,7 +399,7 @@ template <class K> std::size_t FmmEvaluator<K>::grid_near_mutual(const GridGeome
 template <class K> std::size_t FmmEvaluator<K>::grid_near_one_sided(const GridGeometry &g, bool want_pot)
 {
   const std::vector<int> &sb = grid_src_begin_, &tb = grid_trg_begin_;
-  const double L = g.L;
+  const double *L = g.L;
   std::vector<std::size_t> zc(g.kc, 0);
 #pragma omp parallel
   {
@@ -402,9 +415,9 @@ template <class K> std::size_t FmmEvaluator<K>::grid_near_one_sided(const GridGe
         signed char sh[3];
         const int a = grid_neighbour(b, o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, sh);
         for (std::size_t i = 0; i < n; ++i) {
-          x[i] = tx_[t + i] - sh[0] * L;
-          y[i] = ty_[t + i] - sh[1] * L;
-          zz[i] = tz_[t + i] - sh[2] * L;
+          x[i] = tx_[t + i] - sh[0] * L[0];
+          y[i] = ty_[t + i] - sh[1] * L[1];
+          zz[i] = tz_[t + i] - sh[2] * L[2];
         }
         p2p_pg<K, true>(k_, want_pot, {n, x.data(), y.data(), zz.data()}, source_range(sb[a], sb[a + 1] - sb[a]),
                         result_at(t), &zc[b]);
@@ -427,42 +440,49 @@ template <class K>
 void FmmEvaluator<K>::grid_wrap_correction(const GridGeometry &g, Communicator *comm, double quad, bool want_pot)
 {
   const std::vector<int> &sb = grid_src_begin_, &tb = grid_trg_begin_, &own_end = grid_own_end_;
-  const int k = g.k, kc = g.kc;
-  const double L = g.L, *c = opt_.root_center;
-  std::vector<double> Qa(3 * (std::size_t) k, 0.0), Pa(3 * (std::size_t) k, 0.0);
+  const int *k = g.k, kc = g.kc;
+  const int off[3] = {0, k[0], k[0] + k[1]}, nk = k[0] + k[1] + k[2];    // per-axis marginals, concatenated
+  const double *L = g.L, *c = opt_.root_center;
+  auto axis_index = [&](int b, int a[3]) {
+    a[0] = b / (k[1] * k[2]);
+    a[1] = (b / k[2]) % k[1];
+    a[2] = b % k[2];
+  };
+  std::vector<double> Qa(nk, 0.0), Pa(nk, 0.0);
   for (int b = 0; b < kc; ++b) {
-    const int sa[3] = {b / (k * k), (b / k) % k, b % k};
+    int sa[3];
+    axis_index(b, sa);
     for (int j = sb[b]; j < own_end[b]; ++j) {
       const double y[3] = {sx_[j] - c[0], sy_[j] - c[1], sz_[j] - c[2]};
       for (int d = 0; d < 3; ++d) {
-        Qa[d * k + sa[d]] += sq_[j];
-        Pa[d * k + sa[d]] += sq_[j] * y[d];
+        Qa[off[d] + sa[d]] += sq_[j];
+        Pa[off[d] + sa[d]] += sq_[j] * y[d];
       }
     }
   }
   grid_reduce(comm, Qa.data(), Qa.size());
   grid_reduce(comm, Pa.data(), Pa.size());
-  auto wrap_of = [k](int t, int s) { return (grid_class_representative(t - s, k) - (t - s)) / k; };
-  std::vector<double> A(3 * (std::size_t) k, 0.0), B(3 * (std::size_t) k, 0.0), C(3 * (std::size_t) k, 0.0);
+  // per axis, in units of that axis' period: A = sum m Q, B = sum m L P, C = sum m^2 L^2 Q
+  std::vector<double> A(nk, 0.0), B(nk, 0.0), C(nk, 0.0);
   for (int d = 0; d < 3; ++d)
-    for (int t = 0; t < k; ++t)
-      for (int s2 = 0; s2 < k; ++s2) {
-        const int m = wrap_of(t, s2);
-        A[d * k + t] += m * Qa[d * k + s2];
-        B[d * k + t] += m * Pa[d * k + s2];
-        C[d * k + t] += m * m * Qa[d * k + s2];
+    for (int t = 0; t < k[d]; ++t)
+      for (int s2 = 0; s2 < k[d]; ++s2) {
+        const int m = (grid_class_representative(t - s2, k[d]) - (t - s2)) / k[d];
+        A[off[d] + t] += m * L[d] * Qa[off[d] + s2];
+        B[off[d] + t] += m * L[d] * Pa[off[d] + s2];
+        C[off[d] + t] += m * m * L[d] * L[d] * Qa[off[d] + s2];
       }
 #pragma omp parallel for schedule(static)
   for (int t = 0; t < kc; ++t) {
-    const int ta[3] = {t / (k * k), (t / k) % k, t % k};
-    const double alpha[3] = {A[ta[0]], A[k + ta[1]], A[2 * k + ta[2]]};
-    const double beta = B[ta[0]] + B[k + ta[1]] + B[2 * k + ta[2]];
-    const double gamma = C[ta[0]] + C[k + ta[1]] + C[2 * k + ta[2]];
-    const double g2 = 2 * quad * L;    // gradient: g2 alpha (fused multiply-add into the accumulators)
+    int ta[3];
+    axis_index(t, ta);
+    const double alpha[3] = {A[off[0] + ta[0]], A[off[1] + ta[1]], A[off[2] + ta[2]]};
+    const double beta = B[off[0] + ta[0]] + B[off[1] + ta[1]] + B[off[2] + ta[2]];
+    const double gamma = C[off[0] + ta[0]] + C[off[1] + ta[1]] + C[off[2] + ta[2]];
+    const double g2 = 2 * quad;    // gradient: g2 alpha (fused multiply-add into the accumulators)
     for (int i = tb[t]; i < tb[t + 1]; ++i) {
       const double x[3] = {tx_[i] - c[0], ty_[i] - c[1], tz_[i] - c[2]};
-      if (want_pot)
-        tp_[i] += quad * (2 * L * (alpha[0] * x[0] + alpha[1] * x[1] + alpha[2] * x[2] - beta) + L * L * gamma);
+      if (want_pot) tp_[i] += quad * (2 * (alpha[0] * x[0] + alpha[1] * x[1] + alpha[2] * x[2] - beta) + gamma);
       tgx_[i] = std::fma(g2, alpha[0], tgx_[i]);
       tgy_[i] = std::fma(g2, alpha[1], tgy_[i]);
       tgz_[i] = std::fma(g2, alpha[2], tgz_[i]);

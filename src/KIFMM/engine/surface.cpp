@@ -35,6 +35,17 @@ SurfacePoints unit_surface(int p, double alpha)
   return s;
 }
 
+SurfacePoints shaped_surface(int p, double alpha, const double shape[3])
+{
+  SurfacePoints s = unit_surface(p, alpha);
+  for (int i = 0; i < s.size(); ++i) {
+    s.x[i] *= shape[0];
+    s.y[i] *= shape[1];
+    s.z[i] *= shape[2];
+  }
+  return s;
+}
+
 void box_surface(const SurfacePoints &unit, const double c[3], double h, SurfacePoints &out)
 {
   const int n = unit.size();

@@ -26,6 +26,10 @@ struct SurfacePoints {
 // Surface of the unit box scaled by alpha (points in a fixed order shared by all users).
 SurfacePoints unit_surface(int p, double alpha);
 
+// Surface of a rectangular unit box (half-widths shape[d], largest 1): unit_surface scaled per
+// axis. The surfaces of the cells of a rectangular root (RootBox::shape).
+SurfacePoints shaped_surface(int p, double alpha, const double shape[3]);
+
 // Same surface for a box of center c and half-width h: c + h * unit_surface(p, alpha).
 void box_surface(const SurfacePoints &unit, const double c[3], double h, SurfacePoints &out);
 

@@ -6,6 +6,8 @@
 namespace kifmm {
 
 namespace {
+// the single-level grid is chosen with the tree when asked for (in periodic cells the octree
+// does not fit, only grids are candidates: choose_tree)
 bool grid_is_chosen(const Options &options, const TreeRequest &request)
 {
   return options.periodic && request.grid < 0;
@@ -23,7 +25,7 @@ TreePlan plan_tree(const Options &options, const TreeRequest &request, const Opt
     return plan;
   }
   const bool choose_grid = grid_is_chosen(options, request);
-  plan.uniform = choose_tree(opt.order, request.n, opt.periodic, choose_grid);
+  plan.uniform = choose_tree(opt.order, request.n, opt.periodic, choose_grid, opt.periodic ? opt.root_shape : nullptr);
   opt.leaf_size = plan.uniform.leaf_size;
   if (choose_grid) opt.periodic_grid = plan.uniform.grid;
   // several ranks: each holds only its own points, so the uniform choice, the same on every rank

@@ -36,12 +36,17 @@ struct Options {
   bool fixed_root = false;
   double root_center[3] = {0.0, 0.0, 0.0};
   double root_half_width = 1.0;
-  // Periodic in x, y and z with the fixed root as the (cubic) periodic cell; points are wrapped
+  // Half-widths of the fixed root per axis in units of root_half_width (largest 1): a
+  // rectangular root, e.g. the periodic cell of an orthogonal box. Every cell of the tree has
+  // this shape; its operators are computed for it (in memory; the on-disk cache holds cubes).
+  double root_shape[3] = {1.0, 1.0, 1.0};
+  // Periodic in x, y and z with the fixed root as the periodic cell (cube or rectangular box,
+  // root_shape); points are wrapped
   // into it. Laplace: tin-foil Ewald sum (k = 0 omitted) with a uniform neutralizing background
   // for a net charge; Yukawa: the lattice sum. Needs fixed_root (see set_root, periodic.h).
   bool periodic = false;
   // Periodic only: 0 = octree; k >= 3 = one level of k^3 cells instead (periodic_grid.h;
-  // Laplace and Yukawa; evaluate() and evaluate_distributed()).
+  // Laplace and Yukawa; evaluate() and evaluate_distributed(); cubic cells only).
   int periodic_grid = 0;
   // Distributed evaluation: level of the global top tree (0 = from the number of ranks,
   // see distributed.h).
@@ -92,7 +97,9 @@ class Evaluator {
   virtual const KernelSpec &kernel() const = 0;
   virtual const Options &options() const = 0;
   // New fixed root (e.g. the periodic cell of a box that changed); sets fixed_root.
+  // set_root: a cube; set_root_box: a rectangular box of these half-widths per axis.
   virtual void set_root(const double center[3], double half_width) = 0;
+  virtual void set_root_box(const double center[3], const double half_widths[3]) = 0;
 };
 
 std::unique_ptr<Evaluator> make_evaluator(const KernelSpec &kernel, const Options &options);
@@ -139,7 +146,20 @@ struct TreeChoice {
 // grid (periodic): also the single-level grids
 // k = 3 .. max_grid_cells(order) on uniform counts (cost_model.h), chosen with the rule of the
 // choice from the points below (TreeChoice::grid; the octree's leaf size and depth are kept).
-TreeChoice choose_tree(int order, std::size_t n, bool periodic, bool grid = false);
+// shape (periodic, Options::root_shape; null: a cube): grids of nearly cubic cells only, and in
+// cells the octree does not fit (octree_fits_cell) only grids (grid 0 returned: none fits).
+TreeChoice choose_tree(int order, std::size_t n, bool periodic, bool grid = false, const double *shape = nullptr);
+
+// Periodic cells that are not cubes (Options::root_shape, the half-widths per axis in units of
+// the largest): every cell of the octree has the periodic cell's shape, and the single-level
+// grid has cells per axis in proportion to the edges (grid_cells_per_axis, periodic_grid.h).
+// Both are accurate for nearly cubic cells (at the same order, errors 1.5-3.5x those of cubes
+// when the longest edge is 1.05 times the shortest, 6-60x at 1.1): the octree fits periodic
+// cells within max_cell_aspect, other boxes take a grid whose cells are (grid_fits_cell: also
+// within the grid's memory bound at this order).
+constexpr double max_cell_aspect = 1.05;
+bool octree_fits_cell(const double shape[3]);
+bool grid_fits_cell(int order, int k, const double shape[3]);
 
 // Tree for these n points (N-body: sources = targets = xyz, the evaluator's options: order,
 // periodic, root, max_depth; options.leaf_size is ignored): builds the octree and interaction

@@ -7,7 +7,6 @@
 #include <Eigen/Dense>
 #include <Eigen/SVD>
 #include <cmath>
-#include <cstdlib>
 
 namespace kifmm {
 
@@ -20,7 +19,7 @@ std::size_t OperatorSet::bytes() const
   return b * sizeof(double);
 }
 
-double pinv_relative_cutoff(int) { const char *e = std::getenv("KIFMM_PINV_CUT"); return e ? std::atof(e) : 1e-15; }
+double pinv_relative_cutoff(int) { return 1e-15; }
 
 void matvec(const double *M, int rows, int cols, const double *x, double *y, double alpha, bool accumulate)
 {

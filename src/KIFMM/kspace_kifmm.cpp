@@ -228,6 +228,7 @@ void KSpaceKIFMM::init()
     }
   }
   opt.periodic = periodic;
+  if (periodic) periodic_root(opt);    // the box: center, half-widths (kspace_kifmm_periodic.cpp)
   if (kset.grid > 0 && !periodic)
     error->all(FLERR, "kspace_modify kifmm grid {}: the single-level grid needs periodic boundaries "
                       "(boundary p p p)", kset.grid);
@@ -238,6 +239,7 @@ void KSpaceKIFMM::init()
   tree_request = kifmm::TreeRequest{(std::size_t) nstrong, kset.leaf, kset.grid, distributed()};
   const kifmm::TreePlan plan = kifmm::plan_tree(opt, tree_request, engine ? &engine_options : nullptr);
   opt = plan.options;
+  if (periodic) fit_periodic_box(opt);    // the octree in nearly cubic boxes, else a grid that fits
   const kifmm::TreeChoice &tree = plan.uniform;
   const bool grid_auto = periodic && kset.grid < 0;
   tree_choice_pending = plan.from_points;
@@ -269,21 +271,29 @@ void KSpaceKIFMM::init()
     mesg += fmt::format("  kernel = {}", kifmm_lammps::kernel_name(kset.kernel));
     if (kset.kernel == LongRangeKernel::Gravity) mesg += fmt::format(" (G = {:.8g})", kset.gravity_G);
     if (kset.kernel == LongRangeKernel::Yukawa) mesg += fmt::format(" (kappa = {:.8g})", kset.kappa);
-    if (tree_choice_pending)
+    const bool grid_only = periodic && !kifmm::octree_fits_cell(engine_options.root_shape);
+    if (tree_choice_pending && grid_only)
+      mesg += fmt::format("\n  order = {}, single-level grid chosen from the atom positions at the first "
+                          "evaluation (a box that is not nearly cubic: grids of nearly cubic cells, least "
+                          "modelled cost; for {} uniformly spread atoms: {} cells)",
+                          engine_options.order, nstrong, grid_cells_text(engine_options));
+    else if (tree_choice_pending)
       mesg += fmt::format("\n  order = {}, {} chosen from the atom positions at the first "
                           "evaluation (least modelled cost of the actual trees{}; for {} uniformly "
                           "spread atoms, {} boundaries: leaf size {}, tree depth {})",
                           engine_options.order, grid_auto ? "leaf size or single-level grid" : "leaf size",
                           grid_auto ? " and grids" : "",
                           nstrong, periodic ? "periodic" : "open", tree.leaf_size, tree.depth);
+    else if (grid_only)
+      mesg += fmt::format("\n  order = {}", engine_options.order);
     else
       mesg += fmt::format("\n  order = {}, leaf size = {}", engine_options.order, engine_options.leaf_size);
-    if (tree.depth >= 0 && !tree_choice_pending)
+    if (tree.depth >= 0 && !tree_choice_pending && !grid_only)
       mesg += fmt::format(" (tree depth {} for {} uniformly spread atoms, {} boundaries: least "
                           "modelled cost)",
                           tree.depth, nstrong, periodic ? "periodic" : "open");
     if (engine_options.periodic_grid > 0 && (kset.grid > 0 || !tree_choice_pending))
-      mesg += fmt::format("\n  periodic single-level grid of {}^3 cells ({})", engine_options.periodic_grid,
+      mesg += fmt::format("\n  periodic single-level grid of {} cells ({})", grid_cells_text(engine_options),
                           kset.grid > 0 ? "kspace_modify kifmm grid"
                                         : fmt::format("for {} uniformly spread atoms: least modelled cost", nstrong));
     mesg += "\n";
@@ -339,9 +349,9 @@ void KSpaceKIFMM::choose_tree_from_atoms()
   if (comm->me != 0) return;
   if (grid > 0)
     utils::logmesg(lmp,
-                   "  KIFMM periodic single-level grid of {}^3 cells{} for {} atoms (modelled {:.3g} s "
+                   "  KIFMM periodic single-level grid of {} cells{} for {} atoms (modelled {:.3g} s "
                    "per evaluation on one thread; choice {:.3g} s)\n",
-                   grid, kset.grid < 0 ? " chosen from the atom positions" : "", n, c.cost, t_choice);
+                   grid_cells_text(engine_options), kset.grid < 0 ? " chosen from the atom positions" : "", n, c.cost, t_choice);
   else
     utils::logmesg(lmp,
                    "  KIFMM tree chosen from the positions of {} atoms: leaf size {} (tree depth {}, "
@@ -579,10 +589,10 @@ void KSpaceKIFMM::report_first_evaluation()
   const kifmm::Stats &s = engine->stats();
   if (comm->me == 0 && engine_options.periodic_grid > 0)
     utils::logmesg(lmp,
-                   "  KIFMM first evaluation: {} sources, single-level grid of {}^3 cells, {} "
+                   "  KIFMM first evaluation: {} sources, single-level grid of {} cells, {} "
                    "coincident pairs excluded\n"
                    "  precompute {:.3g} s, operators and grid kernels {:.3g} MB, cells {:.3g} MB\n",
-                   s.n_sources, engine_options.periodic_grid, s.coincident_pairs, s.t_precompute,
+                   s.n_sources, grid_cells_text(engine->options()), s.coincident_pairs, s.t_precompute,
                    s.operator_bytes / 1048576.0, s.tree_bytes / 1048576.0);
   else if (comm->me == 0)
     utils::logmesg(lmp,

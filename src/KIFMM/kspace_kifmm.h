@@ -107,9 +107,15 @@ class KSpaceKIFMM : public KSpace {
   // periodic boundaries (kspace_kifmm_periodic.cpp)
   bool periodic = false;
   bool warned_periodic_virial = false;
+  bool warned_octree_fallback = false;    // a box no grid fits at this order (fit_periodic_box)
   int scalar_pressure_written = -1, scalar_pressure_user = -1;    // pressure/scalar (periodic_init)
   void periodic_init();
   void periodic_cell();
+  void periodic_box(double center[3], double half_widths[3]) const;
+  void periodic_root(kifmm::Options &o) const;
+  bool periodic_fits(const kifmm::Options &o) const;
+  void fit_periodic_box(kifmm::Options &o);
+  std::string grid_cells_text(const kifmm::Options &o) const;
   void periodic_virial(double e_local);
 
   // the fix scheduling the evaluations (fix kifmm/stride), found among the fixes at init

@@ -302,7 +302,7 @@ void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::s
   if (comm->me == 0) {
     const kifmm::Options &o = engine_options;
     const std::string tree = o.periodic_grid > 0
-        ? fmt::format("periodic single-level grid of {}^3 cells", o.periodic_grid)
+        ? fmt::format("periodic single-level grid of {} cells", grid_cells_text(o))
         : fmt::format("leaf size {}, tree depth {}", o.leaf_size, engine->stats().depth);
     if (verified_error > kset.accuracy)
       error->warning(FLERR,

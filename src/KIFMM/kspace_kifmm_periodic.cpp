@@ -1,7 +1,8 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
-// Periodic boundaries of kspace_style kifmm (boundary p p p, cubic box): checks at init, the
-// periodic cell handed to the engine at every evaluation (boxes that change size), the
-// virial. The lattice sums themselves are in the engine (engine/periodic.h).
+// Periodic boundaries of kspace_style kifmm (boundary p p p, any orthogonal box): checks at
+// init, the periodic cell handed to the engine at every evaluation (boxes that change size or
+// shape), the tree or grid that fits the box, the virial. The lattice sums themselves are in the
+// engine (engine/periodic.h, engine/periodic_grid.h).
 #include "kspace_kifmm.h"
 
 #include "comm.h"
@@ -9,8 +10,10 @@
 #include "error.h"
 #include "update.h"
 
+#include <algorithm>
 #include <cmath>
 #include <mpi.h>
+#include <string>
 
 using namespace LAMMPS_NS;
 using kifmm_lammps::LongRangeKernel;
@@ -71,27 +74,115 @@ void KSpaceKIFMM::periodic_init()
                    qsum);
 }
 
-// The box is the periodic cell: cubic (within 1e-10 relative), handed to the engine at every
-// evaluation so that fix deform, fix npt and change_box are followed.
+// The box as the periodic cell: center and half-widths.
+void KSpaceKIFMM::periodic_box(double center[3], double half_widths[3]) const
+{
+  for (int d = 0; d < 3; ++d) {
+    center[d] = 0.5 * (domain->boxlo[d] + domain->boxhi[d]);
+    half_widths[d] = 0.5 * domain->prd[d];
+  }
+}
+
+// The periodic cell as the engine's fixed root (largest half-width and the shape).
+void KSpaceKIFMM::periodic_root(kifmm::Options &o) const
+{
+  double c[3], hw[3];
+  periodic_box(c, hw);
+  const double h = std::max(hw[0], std::max(hw[1], hw[2]));
+  o.fixed_root = true;
+  o.root_half_width = h;
+  for (int d = 0; d < 3; ++d) {
+    o.root_center[d] = c[d];
+    o.root_shape[d] = hw[d] == h ? 1.0 : hw[d] / h;
+  }
+}
+
+// "k^3" for a cube, "kx x ky x kz" for a rectangular box (cells per axis).
+std::string KSpaceKIFMM::grid_cells_text(const kifmm::Options &o) const
+{
+  int c[3];
+  kifmm::grid_cells_per_axis(o.periodic_grid, o.root_shape, c);
+  if (c[0] == c[1] && c[1] == c[2]) return fmt::format("{}^3", c[0]);
+  return fmt::format("{} x {} x {}", c[0], c[1], c[2]);
+}
+
+// The octree fits a nearly cubic box; a grid, cells that are nearly cubic.
+bool KSpaceKIFMM::periodic_fits(const kifmm::Options &o) const
+{
+  return o.periodic_grid > 0 ? kifmm::grid_fits_cell(o.order, o.periodic_grid, o.root_shape)
+                             : kifmm::octree_fits_cell(o.root_shape);
+}
+
+// The tree of these options made to fit the box: the octree needs a box whose longest edge is
+// at most kifmm::max_cell_aspect times its shortest, a grid nearly cubic cells (the cells per
+// axis in proportion to the edges). What does not fit and was not given is replaced by the
+// grid of least modelled cost that fits; what was given and does not fit is an error.
+void KSpaceKIFMM::fit_periodic_box(kifmm::Options &o)
+{
+  if (periodic_fits(o)) return;
+  const double *L = domain->prd;
+  if (o.periodic_grid == 0 && kset.grid == 0)
+    error->all(FLERR,
+               "kspace_style kifmm: 'kspace_modify kifmm grid no' (the octree) needs a nearly cubic "
+               "periodic box (longest edge at most {} times the shortest); the box lengths are "
+               "{:.10g} {:.10g} {:.10g} (step {}): use 'grid auto' or a grid of nearly cubic cells",
+               kifmm::max_cell_aspect, L[0], L[1], L[2], update->ntimestep);
+  if (o.periodic_grid > 0 && kset.grid > 0) {
+    int c[3];
+    kifmm::grid_cells_per_axis(o.periodic_grid, o.root_shape, c);
+    std::string fit;
+    int listed = 0;
+    for (int k = 3; k <= kifmm::max_grid_cells_long(o.order, o.root_shape) && listed < 6; ++k)
+      if (kifmm::grid_fits_cell(o.order, k, o.root_shape)) {
+        fit += (listed++ ? ", " : "") + std::to_string(k);
+      }
+    error->all(FLERR,
+               "kspace_modify kifmm grid {}: in the box of lengths {:.10g} {:.10g} {:.10g} (step {}) "
+               "its {} x {} x {} cells are not nearly cubic (longest edge {:.4g} times the shortest, "
+               "at most {}) or exceed the grid memory bound at order {}; grids that fit (cells along "
+               "the longest edge): {}",
+               kset.grid, L[0], L[1], L[2], update->ntimestep, c[0], c[1], c[2],
+               kifmm::grid_cell_aspect(c, o.root_shape), kifmm::max_cell_aspect, o.order,
+               fit.empty() ? std::string("none") : fit);
+  }
+  o.periodic_grid = kifmm::choose_tree(o.order, tree_request.n, true, true, o.root_shape).grid;
+  // no grid fits (high orders, whose grids are large): the octree in a box within twice the
+  // tolerance, its error measured as always when an accuracy is requested
+  const double aspect = 1.0 / std::min(o.root_shape[0], std::min(o.root_shape[1], o.root_shape[2]));
+  if (o.periodic_grid == 0 && aspect <= 1.0 + 2 * (kifmm::max_cell_aspect - 1.0) && kset.grid < 0) {
+    if (comm->me == 0 && !warned_octree_fallback)
+      error->warning(FLERR,
+                     "kspace_style kifmm: at order {} no single-level grid of nearly cubic cells fits the "
+                     "periodic box of lengths {:.10g} {:.10g} {:.10g}; the octree is used (cells of the "
+                     "box's shape, longest edge {:.4g} times the shortest: larger errors at this order)",
+                     o.order, L[0], L[1], L[2], aspect);
+    warned_octree_fallback = true;
+    return;
+  }
+  if (o.periodic_grid == 0)
+    error->all(FLERR,
+               "kspace_style kifmm: no single-level grid of nearly cubic cells fits the periodic box "
+               "of lengths {:.10g} {:.10g} {:.10g} (step {}) within the grid memory bound at order {} "
+               "(an octree needs the longest edge at most {} times the shortest)",
+               L[0], L[1], L[2], update->ntimestep, o.order, kifmm::max_cell_aspect);
+}
+
+// The box is the periodic cell, handed to the engine at every evaluation so that fix deform,
+// fix npt and change_box are followed. A box whose shape changed so that the tree in use no
+// longer fits it switches to one that does (fit_periodic_box).
 void KSpaceKIFMM::periodic_cell()
 {
-  const double lx = domain->xprd, ly = domain->yprd, lz = domain->zprd;
-  const double tol = 1e-10 * std::max(lx, std::max(ly, lz));
-  if (std::fabs(lx - ly) > tol || std::fabs(lx - lz) > tol)
-    error->all(FLERR,
-               "kspace_style kifmm: periodic boundaries need a cubic box; the box lengths are "
-               "{:.10g} {:.10g} {:.10g} (step {})",
-               lx, ly, lz, update->ntimestep);
   if (!engine) return;
-  const double center[3] = {0.5 * (domain->boxlo[0] + domain->boxhi[0]),
-                            0.5 * (domain->boxlo[1] + domain->boxhi[1]),
-                            0.5 * (domain->boxlo[2] + domain->boxhi[2])};
+  double center[3], hw[3];
+  periodic_box(center, hw);
   // yukawa on a grid chosen by the cost model (grid auto): its grid kernels depend on kappa
   // times the box length and would be computed again (0.1-0.5 s) at every change of the box
-  // size: the first change switches to the octree (same order and leaf size)
+  // size: the first change switches to the octree (same order and leaf size) where it fits
   const kifmm::Options &o = engine->options();
+  const double h = std::max(hw[0], std::max(hw[1], hw[2]));
+  const double shape[3] = {hw[0] / h, hw[1] / h, hw[2] / h};
   if (kset.kernel == LongRangeKernel::Yukawa && kset.grid < 0 && o.periodic_grid > 0 && o.fixed_root &&
-      o.root_half_width != 0.5 * lx) {
+      o.root_half_width != h && kifmm::octree_fits_cell(shape)) {
     kifmm::Options octree = o;
     octree.periodic_grid = 0;
     engine = kifmm::make_evaluator(engine->kernel(), octree);
@@ -104,7 +195,22 @@ void KSpaceKIFMM::periodic_cell()
                      "the box length\n",
                      update->ntimestep, engine_options.leaf_size);
   }
-  engine->set_root(center, 0.5 * lx);
+  engine->set_root_box(center, hw);
+  if (periodic_fits(engine->options())) return;
+  kifmm::Options refit = engine->options();
+  const int was_grid = refit.periodic_grid;
+  const std::string was = refit.periodic_grid > 0 ? "single-level grid of " + grid_cells_text(refit) + " cells"
+                                                  : std::string("octree");
+  fit_periodic_box(refit);
+  if (refit.periodic_grid == was_grid) return;    // the octree kept: no grid fits (warned)
+  engine = kifmm::make_evaluator(engine->kernel(), refit);
+  engine_options = engine->options();
+  reported_first_evaluation = false;
+  if (comm->me == 0)
+    utils::logmesg(lmp,
+                   "  KIFMM: the box changes shape (step {}, lengths {:.8g} {:.8g} {:.8g}): the {} no "
+                   "longer fits it, the single-level grid of {} cells does\n",
+                   update->ntimestep, domain->xprd, domain->yprd, domain->zprd, was, grid_cells_text(refit));
 }
 
 // Global virial of the periodic system. Coulomb and gravity are homogeneous of degree -1 in all

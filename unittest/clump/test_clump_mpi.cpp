@@ -129,7 +129,7 @@ TEST_P(ClumpMpiKifmm, ParallelEqualsSerial)
     script.replace(at, from.size(), to);
   };
   replace("boundary p p f", std::string("boundary ") + GetParam());
-  // periodic kifmm needs a cubic box
+  // a cubic box: the periodic octree (elongated boxes take the single-level grid)
   replace("region box block -0.2 0.2 -0.05 0.05 -0.05 0.05", "region box block -0.2 0.2 -0.2 0.2 -0.2 0.2");
   replace("fix wall all wall/gran hooke 200.0 NULL 30.0 NULL 0.5 1 zplane -0.05 NULL\n", "");
   script += "set type 1 charge 0.25\ndielectric 1.0e14\nkspace_style kifmm 1e-8\n"

@@ -81,10 +81,11 @@ struct Result {
   std::size_t mutual_pairs = 0;                        // summed over ranks
 };
 
-// periodic_half > 0: periodic boundaries, the cell [-periodic_half, periodic_half]^3
+// periodic_half > 0: periodic boundaries, the cell [-periodic_half, periodic_half]^3 (shape:
+// the rectangular cell of half-widths periodic_half * shape[d])
 template <class K>
 Result compare(const K &k, const kifmm::KernelSpec &spec, const Points &all, const Partition &part, int top_level,
-               int leaf = 24, int order = 6, double periodic_half = 0.0, int grid = 0)
+               int leaf = 24, int order = 6, double periodic_half = 0.0, int grid = 0, const double *shape = nullptr)
 {
   const int me = rank_of_world(), np = size_of_world();
   kifmm::Options o;
@@ -96,6 +97,8 @@ Result compare(const K &k, const kifmm::KernelSpec &spec, const Points &all, con
     o.fixed_root = true;
     o.root_half_width = periodic_half;
     o.periodic_grid = grid;
+    if (shape)
+      for (int d = 0; d < 3; ++d) o.root_shape[d] = shape[d];
   }
   kifmm::FmmEvaluator<K> serial(k, spec, o), dist(k, spec, o);
   const std::size_t n = all.size();
@@ -151,12 +154,12 @@ const Partition kPartitions[] = {slabs_last_empty, blocks, random_owner, all_on_
 const char *kPartitionNames[] = {"slabs (last rank empty)", "blocks", "random", "all on the last rank"};
 
 void check_all_partitions(const Points &p, int top_level, int leaf = 24, double periodic_half = 0.0, int order = 6,
-                          int grid = 0)
+                          int grid = 0, const double *shape = nullptr)
 {
   kifmm::LaplaceKernel k;
   kifmm::KernelSpec spec;
   for (int j = 0; j < 4; ++j) {
-    Result r = compare(k, spec, p, kPartitions[j], top_level, leaf, order, periodic_half, grid);
+    Result r = compare(k, spec, p, kPartitions[j], top_level, leaf, order, periodic_half, grid, shape);
     EXPECT_LE(r.grad, 1e-10) << kPartitionNames[j] << ", top level " << top_level << ", grid " << grid;
     EXPECT_LE(r.pot, 1e-10) << kPartitionNames[j] << ", top level " << top_level << ", grid " << grid;
   }
@@ -414,6 +417,24 @@ TEST(Distributed, PeriodicGridEqualsSerial)
   for (double &q : nc.q) q = std::fabs(q);
   check_all_partitions(nc, 0, 24, 1.0, 8, 4);
   for (std::size_t n : {5, 40}) check_all_partitions(neutral(uniform_cube(n, 35)), 0, 24, 1.0, 6, 3);
+}
+
+// Rectangular periodic cells: the octree in a nearly cubic one, the single-level grid of nearly
+// cubic cells in elongated ones (cells per axis in proportion to the edges)
+TEST(Distributed, PeriodicRectangularCellsEqualSerial)
+{
+  auto in_box = [](Points p, const double shape[3]) {
+    for (std::size_t i = 0; i < p.size(); ++i)
+      for (int d = 0; d < 3; ++d) p.xyz[3 * i + d] *= shape[d];
+    return p;
+  };
+  const double near[3] = {1.0, 0.97, 0.96}, needle[3] = {1.0, 0.5, 0.5}, slab[3] = {0.6, 0.8, 1.0};
+  check_all_partitions(in_box(neutral(uniform_cube(2000, 37)), near), 0, 24, 1.0, 6, 0, near);
+  check_all_partitions(in_box(neutral(periodic_clusters(2000, 38)), near), 2, 24, 1.0, 6, 0, near);
+  check_all_partitions(in_box(neutral(uniform_cube(2000, 39)), needle), 0, 24, 1.0, 6, 6, needle);
+  Points nc = in_box(uniform_cube(2000, 40), slab);
+  for (double &q : nc.q) q = std::fabs(q);    // net charge: background moments and wrap marginals
+  check_all_partitions(nc, 0, 24, 1.0, 6, 10, slab);
 }
 
 TEST(Distributed, PeriodicFewPointsEqualSerial)

@@ -77,13 +77,17 @@ class Periodic : public LammpsFixture {
   double box_length() { return lmp->domain->xprd; }
 
   // LAMMPS ewald k-space part + exact real space (see the file comment). alpha*L = 9 and
-  // kmax = 20 converge both parts to ~1e-16.
+  // kmax = 20 converge both parts to ~1e-16 (rectangular boxes: L the shortest edge, kmax in
+  // proportion to the edges).
   Result ewald_reference()
   {
-    const double L = box_length(), alpha = 9.0 / L, rc = 0.7 * L;
+    const double Lb[3] = {lmp->domain->xprd, lmp->domain->yprd, lmp->domain->zprd};
+    const double Lmin = std::min(Lb[0], std::min(Lb[1], Lb[2])), alpha = 9.0 / Lmin, rc = 0.7 * Lmin;
+    int km[3];
+    for (int d = 0; d < 3; ++d) km[d] = (int) std::ceil(20.0 * Lb[d] / Lmin - 1e-9);
     commands(fmt_cmd("pair_style coul/long {}\npair_coeff * *\npair_modify compute no\n"
-                     "kspace_style ewald 1e-14\nkspace_modify gewald {} kmax/ewald 20 20 20\nrun 0 post no",
-                     rc, alpha));
+                     "kspace_style ewald 1e-14\nkspace_modify gewald {} kmax/ewald {} {} {}\nrun 0 post no",
+                     rc, alpha, km[0], km[1], km[2]));
     Result r{forces_by_id(), thermo("elong")};
     for (int k = 0; k < 3; ++k) r.wdiag[k] = lmp->force->kspace->virial[k];
     EXPECT_DOUBLE_EQ(lmp->force->kspace->g_ewald, alpha);
@@ -101,8 +105,8 @@ class Periodic : public LammpsFixture {
           for (int b = -1; b <= 1; ++b)
             for (int c = -1; c <= 1; ++c) {
               if (i == j && a == 0 && b == 0 && c == 0) continue;
-              const double d[3] = {pos[i][0] - pos[j][0] + a * L, pos[i][1] - pos[j][1] + b * L,
-                                   pos[i][2] - pos[j][2] + c * L};
+              const double d[3] = {pos[i][0] - pos[j][0] + a * Lb[0], pos[i][1] - pos[j][1] + b * Lb[1],
+                                   pos[i][2] - pos[j][2] + c * Lb[2]};
               const double r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2], rr = std::sqrt(r2);
               if (rr > rc) continue;
               const double qq = charge[i] * charge[j];
@@ -454,12 +458,21 @@ TEST_F(Periodic, GravityJeansEqualsCoulombWithBackground)
   }
   load(c);
   const double G = 0.8;
+  // the cube (octree) and a rectangular box (single-level grid)
+  for (const char *box : {"", "change_box all y final 0 1.3 remap units box"}) {
+    if (*box) command(box);
+    Result coul = kifmm("1e-10", "order 12");
+    Result grav = kifmm("1e-10", "kernel gravity 0.8 jeans yes order 12");
+    for (auto &[id, f] : coul.f)
+      for (double &v : f) v *= -G;
+    EXPECT_LE(relative_force_error(grav.f, coul.f), 1e-12) << box;
+    EXPECT_NEAR(grav.energy, -G * coul.energy, 1e-12 * std::fabs(coul.energy)) << box;
+  }
+  // and the rectangular box's coulomb with net charge is ewald's (uniform background)
+  Result ref = ewald_reference();
   Result coul = kifmm("1e-10", "order 12");
-  Result grav = kifmm("1e-10", "kernel gravity 0.8 jeans yes order 12");
-  for (auto &[id, f] : coul.f)
-    for (double &v : f) v *= -G;
-  EXPECT_LE(relative_force_error(grav.f, coul.f), 1e-12);
-  EXPECT_NEAR(grav.energy, -G * coul.energy, 1e-12 * std::fabs(coul.energy));
+  EXPECT_LE(relative_force_error(coul.f, ref.f), 1e-9);
+  EXPECT_LE(rel(coul.energy, ref.energy), 1e-9);
 }
 
 // ---------------------------------------------------------------- box changes
@@ -484,22 +497,83 @@ TEST_F(Periodic, GravityWithoutJeansIsAnError)
   EXPECT_LAMMPS_ERROR(command("run 0"), "gravity with periodic boundaries diverges.*jeans yes");
 }
 
-TEST_F(Periodic, NonCubicBoxIsAnErrorNamingTheLengths)
+// ---------------------------------------------------------------- orthogonal boxes
+
+// rectangular boxes: a nearly cubic one (the octree, every cell of the box's shape) and boxes
+// of aspect ratio 1.3 and 4 (the single-level grid of nearly cubic cells), equal to ewald
+TEST_F(Periodic, RectangularBoxesEqualEwald)
+{
+  struct Box {
+    double y, z;
+    std::string modify, expect;
+  };
+  const Box boxes[] = {{0.99, 1.03, "order 14 leaf 40", "leaf size = 40"},
+                       {1.3, 1.0, "order 12", "single-level grid of "},
+                       {0.25, 1.0, "order 12", "single-level grid of "}};
+  for (const Box &b : boxes) {
+    create();    // a new instance per box
+    load(uniform_cube(600, 54));
+    command(fmt_cmd("change_box all y final 0 {} z final 0 {} remap units box", b.y, b.z));
+    Result ref = ewald_reference();
+    commands("kspace_style none\npair_style zero 0.01\npair_coeff * *\nkspace_style kifmm 1e-12\n"
+             "kspace_modify kifmm " + b.modify);
+    const std::string out = output_of("run 0 post no");
+    Result r{forces_by_id(), thermo("elong")};
+    const double ef = relative_force_error(r.f, ref.f), ee = rel(r.energy, ref.energy);
+    if (rank() == 0) std::printf("  box 1 x %g x %g (%s): force %.2e energy %.2e\n", b.y, b.z, b.modify.c_str(), ef, ee);
+    EXPECT_LE(ef, 1e-9) << b.y;
+    EXPECT_LE(ee, 1e-9) << b.y;
+    if (rank() == 0) EXPECT_NE(out.find(b.expect), std::string::npos) << out;
+  }
+}
+
+// the accuracy request in a rectangular box: order and grid from the atoms, error measured
+TEST_F(Periodic, RectangularBoxMeetsTheRequestedAccuracy)
+{
+  load(uniform_cube(1500, 55));
+  command("change_box all x final 0 2 z final 0 0.7 remap units box");
+  Result ref = ewald_reference();
+  for (const char *acc : {"1e-4", "1e-7"}) {
+    Result r = kifmm(acc);
+    const double ef = relative_force_error(r.f, ref.f);
+    if (rank() == 0) std::printf("  box 2 x 1 x 0.7, accuracy %s: force %.2e\n", acc, ef);
+    EXPECT_LE(ef, std::atof(acc)) << acc;
+  }
+}
+
+TEST_F(Periodic, GridThatDoesNotFitTheBoxIsAnErrorListingGridsThatDo)
 {
   load(uniform_cube(50, 52));
   commands("change_box all y final 0 1.25 units box\npair_style zero 0.1\npair_coeff * *\n"
-           "kspace_style kifmm 1e-4");
-  EXPECT_LAMMPS_ERROR(command("run 0"), "cubic box; the box lengths are 1 1.25 1");
+           "kspace_style kifmm 1e-4\nkspace_modify kifmm grid 3");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "grid 3: in the box of lengths 1 1.25 1 .*3 x 3 x 3 cells are not nearly "
+                                        "cubic.*grids that fit \\(cells along the longest edge\\): 5, ");
 }
 
-TEST_F(Periodic, BoxTurningNonCubicDuringARunIsAnError)
+TEST_F(Periodic, OctreeInAnElongatedBoxIsAnError)
 {
-  // the cell is checked at every evaluation: fix deform of x alone (box changed at the end
-  // of step 1) stops the run at step 2
-  load(uniform_cube(50, 60));
-  commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4\n"
-           "fix d all deform 1 x final 0 1.5 remap x");
-  EXPECT_LAMMPS_ERROR(command("run 10"), "cubic box; the box lengths are 1.05 1 1 \\(step 2\\)");
+  load(uniform_cube(50, 56));
+  commands("change_box all y final 0 1.25 units box\npair_style zero 0.1\npair_coeff * *\n"
+           "kspace_style kifmm 1e-4\nkspace_modify kifmm grid no");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "grid no' \\(the octree\\) needs a nearly cubic periodic box.*box "
+                                        "lengths are 1 1.25 1");
+}
+
+// a box that changes shape during a run: the octree while the box is nearly cubic, then the
+// grid; forces and energy follow the box (ewald on the final box)
+TEST_F(Periodic, BoxChangingShapeSwitchesFromTheOctreeToAGrid)
+{
+  load(uniform_cube(600, 60));
+  commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-12\nkspace_modify kifmm order 12 leaf 40\n"
+           "fix d all deform 1 x final 0 1.5 remap x\nthermo 1");
+  const std::string out = output_of("run 10 post no");
+  if (rank() == 0) EXPECT_NE(out.find("the octree no longer fits it, the single-level grid of"), std::string::npos) << out;
+  commands("unfix d");
+  EXPECT_NEAR(lmp->domain->xprd, 1.5, 1e-12);
+  Result ref = ewald_reference();
+  Result r = kifmm("1e-12", "order 12 leaf 40");
+  EXPECT_LE(relative_force_error(r.f, ref.f), 1e-9);
+  EXPECT_LE(rel(r.energy, ref.energy), 1e-9);
 }
 
 TEST_F(Periodic, TriclinicIsAnError)

@@ -365,16 +365,19 @@ int max_grid_cells(int order)
   return k;
 }
 
+// cells of a grid within the memory bound (kernels and convolution buffer at most 64 MB each)
+double grid_memory_cells(int order)
+{
+  return 64e6 / (16.0 * m2l_nfreq(std::min(std::max(order, 2), 16)));
+}
+
 int max_grid_cells_long(int order, const double *shape)
 {
-  const int kmax = max_grid_cells(order);
-  if (!shape || kmax == 0) return kmax;
-  const double cap = (double) kmax * kmax * kmax;
   int k = 3;
-  for (int kk = 3; kk <= 64 * kmax; ++kk) {
+  for (int kk = 3; kk <= 4096; ++kk) {
     int kd[3];
     grid_cells_per_axis(kk, shape, kd);
-    if ((double) kd[0] * kd[1] * kd[2] > cap) break;
+    if ((double) kd[0] * kd[1] * kd[2] > grid_memory_cells(order)) break;
     k = kk;
   }
   return k;
@@ -422,7 +425,8 @@ TreeChoice choose_tree(int order, std::size_t n, bool periodic, bool grid, const
   // convolution: a model that charged that work per rank picked worse grids and, on 4 ranks at
   // order 8, the octree at 2.0 open evaluations where the grid measured 1.6; bench_scaling)
   TreeChoice g = best;
-  for (int k = 3; k <= max_grid_cells_long(order, shape) && uniform_grid_counts(n, k, shape).cells <= (double) n; ++k) {
+  const int kmax = max_grid_cells(order) == 0 ? 0 : max_grid_cells_long(order, shape);    // fitted orders only
+  for (int k = 3; k <= kmax && uniform_grid_counts(n, k, shape).cells <= (double) n; ++k) {
     if (shape && !grid_fits_cell(order, k, shape)) continue;
     const double c = modelled_grid_cost(order, n, uniform_grid_counts(n, k, shape));
     if (g.grid == 0 || c < g.cost) {
@@ -547,8 +551,8 @@ TreeChoice choose_tree(const KernelSpec &kernel, const Options &options, std::si
   if (options.periodic) {
     const double *sh = pts.root.cubic() ? nullptr : options.root_shape;
     TreeChoice grid{tree.leaf_size, tree.depth, 0.0, 0};
-    for (int k = 3; k <= max_grid_cells_long(options.order, sh) && uniform_grid_counts(n, k, sh).cells <= (double) n;
-         ++k) {
+    const int kmax = max_grid_cells(options.order) == 0 ? 0 : max_grid_cells_long(options.order, sh);
+    for (int k = 3; k <= kmax && uniform_grid_counts(n, k, sh).cells <= (double) n; ++k) {
       if (sh && !grid_fits_cell(options.order, k, sh)) continue;
       const double c = modelled_grid_cost(
           options.order, n, grid_counts(n, pts.xyz, options.root_center, options.root_half_width, k, sh));

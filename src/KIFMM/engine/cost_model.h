@@ -113,7 +113,5 @@ double modelled_grid_cost(int order, std::size_t n, const TreeCounts &counts);
 // convolution buffer are each at most 64 MB; 0 above the largest order with a fitted constant.
 // Rectangular cells: at most max_grid_cells^3 cells in all.
 int max_grid_cells(int order);
-// Cells along the longest axis of the grids to try in a cell of this shape: 3 .. this.
-int max_grid_cells_long(int order, const double *shape);
 
 }    // namespace kifmm

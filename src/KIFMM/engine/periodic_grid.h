@@ -52,30 +52,6 @@ struct GridKernel {
   std::size_t bytes() const { return hat.size() * sizeof(std::complex<double>); }
 };
 
-// Cells per axis of the grid with k cells along the longest axis of a periodic cell of this
-// shape (RootBox::shape, largest 1; null or a cube: k k k): round(k shape[d]), at least 3.
-inline void grid_cells_per_axis(int k, const double *shape, int cells[3])
-{
-  for (int d = 0; d < 3; ++d) cells[d] = shape ? std::max(3, (int) std::lround(k * shape[d])) : k;
-}
-// Half-widths of one cell (largest 1) and the largest one's length in units of the periodic
-// cell's half-width H: cell d has half-width H shape[d] / cells[d].
-inline double grid_cell_shape(const int cells[3], const double *shape, double cell_shape[3])
-{
-  double w[3], m = 0;
-  for (int d = 0; d < 3; ++d) m = std::max(m, w[d] = (shape ? shape[d] : 1.0) / cells[d]);
-  for (int d = 0; d < 3; ++d) cell_shape[d] = w[d] == m ? 1.0 : w[d] / m;
-  return m;
-}
-// Longest over shortest cell edge (1: cubic cells). The choice offers grids whose cells are
-// within max_cell_aspect (kifmm.h).
-inline double grid_cell_aspect(const int cells[3], const double *shape)
-{
-  double cs[3];
-  grid_cell_shape(cells, shape, cs);
-  return 1.0 / std::min(cs[0], std::min(cs[1], cs[2]));
-}
-
 // Cell index (a0 ky + a1) kz + a2 of a point of the cell [c - H shape, c + H shape) in the grid
 // of cells[0] x cells[1] x cells[2] cells (points on the upper faces or outside are clamped into
 // the boundary cells; shape null: a cube).

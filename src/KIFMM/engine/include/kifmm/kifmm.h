@@ -10,6 +10,8 @@
 // prefactors (coulomb: F_i = -qqrd2e q_i g_i; gravity: F_i = +G m_i g_i).
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <memory>
 #include <string>
@@ -152,7 +154,7 @@ TreeChoice choose_tree(int order, std::size_t n, bool periodic, bool grid = fals
 
 // Periodic cells that are not cubes (Options::root_shape, the half-widths per axis in units of
 // the largest): every cell of the octree has the periodic cell's shape, and the single-level
-// grid has cells per axis in proportion to the edges (grid_cells_per_axis, periodic_grid.h).
+// grid has cells per axis in proportion to the edges (grid_cells_per_axis below).
 // Both are accurate for nearly cubic cells (at the same order, errors 1.5-3.5x those of cubes
 // when the longest edge is 1.05 times the shortest, 6-60x at 1.1): the octree fits periodic
 // cells within max_cell_aspect, other boxes take a grid whose cells are (grid_fits_cell: also
@@ -160,6 +162,37 @@ TreeChoice choose_tree(int order, std::size_t n, bool periodic, bool grid = fals
 constexpr double max_cell_aspect = 1.05;
 bool octree_fits_cell(const double shape[3]);
 bool grid_fits_cell(int order, int k, const double shape[3]);
+// Cells along the longest axis of the grids that fit in the memory bound at this order (kernels
+// and convolution buffer at most 64 MB each) in a cell of this shape: 3 .. this. (In cubes and
+// nearly cubic cells, where the octree is the alternative, choose_tree offers grids only at the
+// orders whose grid cost is fitted, up to 10.)
+int max_grid_cells_long(int order, const double *shape);
+
+// Cells per axis of the grid with k cells along the longest axis of a periodic cell of this
+// shape (RootBox::shape, largest 1; null or a cube: k k k): round(k shape[d]), at least 3.
+inline void grid_cells_per_axis(int k, const double *shape, int cells[3])
+{
+  for (int d = 0; d < 3; ++d) cells[d] = shape ? std::max(3, (int) std::lround(k * shape[d])) : k;
+}
+// Half-widths of one cell (largest 1) and the largest one's length in units of the periodic
+// cell's half-width H: cell d has half-width H shape[d] / cells[d].
+inline double grid_cell_shape(const int cells[3], const double *shape, double cell_shape[3])
+{
+  double w[3], m = 0;
+  for (int d = 0; d < 3; ++d) m = std::max(m, w[d] = (shape ? shape[d] : 1.0) / cells[d]);
+  for (int d = 0; d < 3; ++d) cell_shape[d] = w[d] == m ? 1.0 : w[d] / m;
+  return m;
+}
+// Longest over shortest cell edge (1: cubic cells). The choice offers grids whose cells are
+// within max_cell_aspect.
+inline double grid_cell_aspect(const int cells[3], const double *shape)
+{
+  double cs[3];
+  grid_cell_shape(cells, shape, cs);
+  return 1.0 / std::min(cs[0], std::min(cs[1], cs[2]));
+}
+
+
 
 // Tree for these n points (N-body: sources = targets = xyz, the evaluator's options: order,
 // periodic, root, max_depth; options.leaf_size is ignored): builds the octree and interaction

@@ -255,6 +255,7 @@ template <class K> class FmmEvaluator : public Evaluator {
     double H = 0, h = 0;                           // largest half-width of the periodic cell, of a grid cell
     double cs[3] = {1, 1, 1};                      // a grid cell's half-widths in units of h (largest 1)
     double w[3] = {0, 0, 0}, L[3] = {0, 0, 0};     // grid cell widths, periods
+    bool slab = false;                             // periodic_dims 2: open in z
   };
   static constexpr int kGridBatch = 64;            // cells per batched operator application
   GridGeometry grid_geometry() const;

@@ -104,7 +104,7 @@ bool plan_mutual_near(const Octree &tree, InteractionLists &lists, PeriodicImage
 }
 
 void wrap_into_cell(std::size_t n, const double *xyz, const double center[3], double h, std::vector<double> &out,
-                    const double *shape)
+                    const double *shape, int dims)
 {
   out.resize(3 * n);
   double L[3], lo[3];
@@ -116,7 +116,7 @@ void wrap_into_cell(std::size_t n, const double *xyz, const double center[3], do
   for (std::size_t i = 0; i < n; ++i)
     for (int d = 0; d < 3; ++d) {
       double x = xyz[3 * i + d];
-      if (x < lo[d] || x >= lo[d] + L[d]) {
+      if (d < dims && (x < lo[d] || x >= lo[d] + L[d])) {
         x -= L[d] * std::floor((x - lo[d]) / L[d]);
         if (x >= lo[d] + L[d]) x -= L[d];    // rounding
         if (x < lo[d]) x = lo[d];

@@ -73,8 +73,9 @@ void build_periodic_interaction_lists(const Octree &tree, InteractionLists &list
 
 // Copies of the points wrapped into the cell [center - h, center + h)^3, or with shape (the
 // half-widths per axis in units of h, RootBox::shape) into the box [center - h shape, center + h shape).
+// dims: the first dims coordinates are wrapped (2: a slab, z kept).
 void wrap_into_cell(std::size_t n, const double *xyz, const double center[3], double h,
-                    std::vector<double> &out, const double *shape = nullptr);
+                    std::vector<double> &out, const double *shape = nullptr, int dims = 3);
 
 // Far-image operator table of the unit root (half-width 1, period 2) for order p:
 // r[((i+p-1)*m + j+p-1)*m + k+p-1] = R((i,j,k) * 2*1.05/(p-1)), m = 2p-1. For a root of
@@ -108,5 +109,13 @@ void periodic_direct_sum(const KernelSpec &kernel, const double center[3], doubl
                          std::size_t n_src, const double *src_xyz, const double *src_q,
                          std::size_t n_trg, const double *trg_xyz, double *pot, double *grad,
                          const double *shape = nullptr);
+
+// Exact doubly periodic reference (periodic in x and y, open in z: Options::periodic_dims = 2;
+// Laplace): the Ewald sum of slab_ewald.h over the images in x and y of the cell of half-widths
+// h shape[0], h shape[1] centred at center (points wrapped in x and y; z as given), O(N M K).
+// Pairs at r = 0 skip only the bare n = 0 term. A net charge needs no background here.
+void slab_direct_sum(const double center[3], double half_width, const double *shape, std::size_t n_src,
+                     const double *src_xyz, const double *src_q, std::size_t n_trg, const double *trg_xyz,
+                     double *pot, double *grad);
 
 }    // namespace kifmm

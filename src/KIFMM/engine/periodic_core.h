@@ -45,14 +45,29 @@ void FmmEvaluator<K>::periodic_wrap(std::size_t ns, const double *&sxyz, std::si
 {
   if (!opt_.fixed_root || !(opt_.root_half_width > 0))
     throw std::invalid_argument("kifmm: periodic evaluation needs the periodic cell as fixed root");
+  const int dims = opt_.periodic_dims;
+  if (dims != 3 && dims != 2) throw std::invalid_argument("kifmm: Options::periodic_dims must be 3 or 2");
+  if (dims == 2 && !grid_)
+    throw std::invalid_argument("kifmm: a slab (periodic_dims 2) needs the single-level grid (periodic_grid > 0)");
   const bool same = sxyz == txyz && ns == nt;
-  wrap_into_cell(ns, sxyz, opt_.root_center, opt_.root_half_width, pwrap_src_, opt_.root_shape);
+  wrap_into_cell(ns, sxyz, opt_.root_center, opt_.root_half_width, pwrap_src_, opt_.root_shape, dims);
   sxyz = pwrap_src_.data();
   if (same) {
     txyz = sxyz;
   } else {
-    wrap_into_cell(nt, txyz, opt_.root_center, opt_.root_half_width, pwrap_trg_, opt_.root_shape);
+    wrap_into_cell(nt, txyz, opt_.root_center, opt_.root_half_width, pwrap_trg_, opt_.root_shape, dims);
     txyz = pwrap_trg_.data();
+  }
+  if (dims == 2) {    // a slab: every point within the cell's z extent
+    const double zlo = opt_.root_center[2] - opt_.root_half_width * opt_.root_shape[2];
+    const double zhi = opt_.root_center[2] + opt_.root_half_width * opt_.root_shape[2];
+    auto check = [&](std::size_t n, const double *x) {
+      for (std::size_t i = 0; i < n; ++i)
+        if (!(x[3 * i + 2] >= zlo && x[3 * i + 2] <= zhi))
+          throw std::invalid_argument("kifmm: a point lies outside the slab's z extent (periodic_dims 2)");
+    };
+    check(ns, sxyz);
+    if (!same) check(nt, txyz);
   }
 }
 

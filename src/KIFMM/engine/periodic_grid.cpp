@@ -2,6 +2,7 @@
 #include "periodic_grid.h"
 
 #include "ewald_split.h"
+#include "slab_ewald.h"
 #include "m2l_fft.h"
 #include "surface.h"
 
@@ -38,7 +39,7 @@ void grid_free(std::complex<double> *z)
 
 void grid_convolve(const GridKernel &g, std::complex<double> *z, int f0, int f1)
 {
-  const std::size_t kc = (std::size_t) g.cells[0] * g.cells[1] * g.cells[2], nf = g.nfreq;
+  const std::size_t kc = g.slots(), nf = g.nfreq;
   for (int f = f0; f < f1; f += 16) {
     auto *col = reinterpret_cast<fftw_complex *>(z + f);
     fftw_execute_dft((fftw_plan) g.plan_fwd, col, col);
@@ -171,12 +172,114 @@ std::vector<double> grid_kernel_values(const KernelSpec &unit, const int k[3], i
   return v;
 }
 
-std::shared_ptr<GridKernel> compute_grid_kernel(const KernelSpec &unit, const int k[3], int p, const double cs[3])
+// Slab (periodic in x and y, open in z): K_D at x, y as above (classes mod k_d), at z on
+// (2 D_z + i dx) cs_z for D_z in [-(k_z - 1), k_z - 1] (no images in z), G_2 the doubly periodic
+// sum of slab_ewald.h for the unit cell of half-widths k_d cs_d / K in x and y (K the larger),
+// excluding the images adjacent to the target cell (|D_x + k_x n_x|, |D_y + k_y n_y|, |D_z| <= 1).
+// No quadratic part (G_2 is harmonic). v[(x * nc1 + y) * nc2 + z], nc2 = (2 k_z - 1)(2p - 1).
+std::vector<double> slab_kernel_values(const int k[3], int p, const double cs[3])
 {
-  if (std::min(k[0], std::min(k[1], k[2])) < 3)
-    throw std::invalid_argument("kifmm: a periodic grid needs at least 3 cells per side");
+  const double K = std::max(k[0] * cs[0], k[1] * cs[1]);
+  double box[2];
+  for (int d = 0; d < 2; ++d) box[d] = k[d] * cs[d] == K ? 1.0 : k[d] * cs[d] / K;
+  const SlabSplit s(box);
+  const int m = 2 * p - 1;
+  const int nc[3] = {k[0] * m, k[1] * m, (2 * k[2] - 1) * m};
+  const double dx = p > 1 ? 2.0 * kRadiusInner / (p - 1) : 0.0;
+  std::vector<int> rep[3];
+  std::vector<double> u[3];
+  for (int d = 0; d < 3; ++d) {
+    rep[d].resize(nc[d]);
+    u[d].resize(nc[d]);
+    const int nclass = d < 2 ? k[d] : 2 * k[2] - 1;
+    for (int a = 0; a < nclass; ++a)
+      for (int i = 0; i < m; ++i) {
+        const int D = d < 2 ? grid_class_representative(a, k[d]) : a - (k[2] - 1);
+        rep[d][a * m + i] = D;
+        u[d][a * m + i] = (2.0 * D + (i - (p - 1)) * dx) * cs[d] / K;
+      }
+  }
+  // reciprocal sum over the whole plane of m: Re sum w(|k|, z) e^{i k.rho}
+  int Km[2], M[2];
+  std::vector<std::complex<double>> E[2];
+  for (int d = 0; d < 2; ++d) {
+    Km[d] = s.kmax_axis(d);
+    M[d] = 2 * Km[d] + 1;
+    E[d].resize((std::size_t) nc[d] * M[d]);
+    for (int c = 0; c < nc[d]; ++c)
+      for (int q = 0; q < M[d]; ++q)
+        E[d][(std::size_t) c * M[d] + q] = std::polar(1.0, kPi * (q - Km[d]) * u[d][c] / box[d]);
+  }
+  // A[a][y][z] = sum_b w(k_ab, z) E1[y][b]
+  std::vector<std::complex<double>> A((std::size_t) M[0] * nc[1] * nc[2]);
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int a = 0; a < M[0]; ++a) {
+    std::vector<double> w((std::size_t) M[1] * nc[2]);
+    for (int b = 0; b < M[1]; ++b) {
+      const double kk = s.k_of(a - Km[0], b - Km[1]);
+      for (int z = 0; z < nc[2]; ++z) {
+        double wv = 0, dw;
+        if (kk > 0) s.weight(kk, u[2][z], wv, dw);
+        w[(std::size_t) b * nc[2] + z] = wv;
+      }
+    }
+    for (int y = 0; y < nc[1]; ++y)
+      for (int z = 0; z < nc[2]; ++z) {
+        std::complex<double> acc = 0;
+        for (int b = 0; b < M[1]; ++b) acc += w[(std::size_t) b * nc[2] + z] * E[1][(std::size_t) y * M[1] + b];
+        A[((std::size_t) a * nc[1] + y) * nc[2] + z] = acc;
+      }
+  }
+  std::vector<double> v((std::size_t) nc[0] * nc[1] * nc[2]);
+  const double cut = s.real_cut();
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int x = 0; x < nc[0]; ++x)
+    for (int y = 0; y < nc[1]; ++y)
+      for (int z = 0; z < nc[2]; ++z) {
+        std::complex<double> acc = 0;
+        for (int a = 0; a < M[0]; ++a)
+          acc += E[0][(std::size_t) x * M[0] + a] * A[((std::size_t) a * nc[1] + y) * nc[2] + z];
+        const double r[3] = {u[0][x], u[1][y], u[2][z]};
+        const int D[3] = {rep[0][x], rep[1][y], rep[2][z]};
+        double z0, dz0;
+        s.zero_term(r[2], z0, dz0);
+        double val = acc.real() + z0;
+        std::vector<int> cand[2];
+        for (int c = 0; c < 2; ++c) {
+          const int Q = s.images(c, std::fabs(r[c]));
+          for (int q = -Q; q <= Q; ++q)
+            if (std::abs(r[c] + s.period[c] * q) <= cut || std::abs(D[c] + k[c] * q) <= 1) cand[c].push_back(q);
+        }
+        for (int n0 : cand[0])
+          for (int n1 : cand[1]) {
+            const bool excluded = std::abs(D[0] + k[0] * n0) <= 1 && std::abs(D[1] + k[1] * n1) <= 1 && std::abs(D[2]) <= 1;
+            const double d0 = r[0] + s.period[0] * n0, d1 = r[1] + s.period[1] * n1;
+            const double rho = std::sqrt(d0 * d0 + d1 * d1 + r[2] * r[2]);
+            if (excluded && rho == 0.0) {
+              val += s.reg0();
+              continue;
+            }
+            if (!excluded && rho > cut) continue;
+            double t, F;
+            s.real(rho, excluded, t, F);
+            val += t;
+          }
+        v[((std::size_t) x * nc[1] + y) * nc[2] + z] = val / K;
+      }
+  return v;
+}
+
+std::shared_ptr<GridKernel> compute_grid_kernel(const KernelSpec &unit, const int k[3], int p, const double cs[3],
+                                                bool slab)
+{
+  if (std::min(k[0], k[1]) < 3 || k[2] < (slab ? 1 : 3))
+    throw std::invalid_argument("kifmm: a periodic grid needs at least 3 cells per periodic side");
+  if (slab && unit.type != KernelType::Laplace)
+    throw std::invalid_argument("kifmm: the slab (periodic_dims 2) is for the Laplace kernel");
   auto g = std::make_shared<GridKernel>();
   g->k = k[0];
+  g->slab = slab;
+  g->nz = slab ? 2 * k[2] : k[2];
   double V = 1.0;
   for (int d = 0; d < 3; ++d) {
     g->cells[d] = k[d];
@@ -186,23 +289,24 @@ std::shared_ptr<GridKernel> compute_grid_kernel(const KernelSpec &unit, const in
   g->p = p;
   g->nraw = m2l_nfreq_raw(p);
   g->nfreq = m2l_nfreq(p);
-  g->quad = unit.type == KernelType::Yukawa ? 0.0 : 2 * kPi / (3.0 * V);
+  g->quad = unit.type == KernelType::Yukawa || slab ? 0.0 : 2 * kPi / (3.0 * V);
   const int n = m2l_grid_n(p), m = 2 * p - 1;
-  const int nc1 = k[1] * m, nc2 = k[2] * m;
-  const std::size_t kc = (std::size_t) k[0] * k[1] * k[2];
-  const std::vector<double> v = grid_kernel_values(unit, k, p, cs);
-  std::complex<double> *z = grid_alloc((std::size_t) g->nfreq * kc);
-  std::fill(z, z + (std::size_t) g->nfreq * kc, std::complex<double>(0.0));
+  const int nzc = slab ? 2 * k[2] - 1 : k[2];    // classes along z
+  const int nc1 = k[1] * m, nc2 = nzc * m;
+  const std::size_t kc = (std::size_t) k[0] * k[1] * nzc, ns = g->slots();
+  const std::vector<double> v = slab ? slab_kernel_values(k, p, cs) : grid_kernel_values(unit, k, p, cs);
+  std::complex<double> *z = grid_alloc((std::size_t) g->nfreq * ns);
+  std::fill(z, z + (std::size_t) g->nfreq * ns, std::complex<double>(0.0));
   {
     std::lock_guard<std::mutex> lock(fftw_mutex());
-    const int dims[3] = {k[0], k[1], k[2]};
+    const int dims[3] = {k[0], k[1], g->nz};
     auto *zz = reinterpret_cast<fftw_complex *>(z);
     const int nf = g->nfreq;    // 16 contiguous frequencies of every cell, cells nf apart
     g->plan_fwd = fftw_plan_many_dft(3, dims, 16, zz, nullptr, nf, 1, zz, nullptr, nf, 1, FFTW_FORWARD, FFTW_ESTIMATE);
     g->plan_bwd = fftw_plan_many_dft(3, dims, 16, zz, nullptr, nf, 1, zz, nullptr, nf, 1, FFTW_BACKWARD, FFTW_ESTIMATE);
     if (!g->plan_fwd || !g->plan_bwd) throw std::runtime_error("kifmm: FFTW plan creation failed");
   }
-  const double norm = 1.0 / ((double) n * n * n * (double) kc);
+  const double norm = 1.0 / ((double) n * n * n * (double) ns);
 #pragma omp parallel
   {
     double *grid;
@@ -216,7 +320,10 @@ std::shared_ptr<GridKernel> compute_grid_kernel(const KernelSpec &unit, const in
     }
 #pragma omp for schedule(dynamic, 1)
     for (int cls = 0; cls < (int) kc; ++cls) {
-      const int a[3] = {cls / (k[1] * k[2]), (cls / k[2]) % k[1], cls % k[2]};
+      const int a[3] = {cls / (k[1] * nzc), (cls / nzc) % k[1], cls % nzc};
+      // slot of the class: along z the offset D_z = a[2] - (k_z - 1) modulo the padded length
+      const std::size_t at = ((std::size_t) a[0] * k[1] + a[1]) * g->nz +
+          (slab ? (a[2] - (k[2] - 1) + g->nz) % g->nz : a[2]);
       std::fill(grid, grid + (std::size_t) n * n * n, 0.0);
       for (int i = 0; i < m; ++i)
         for (int j = 0; j < m; ++j)
@@ -226,7 +333,7 @@ std::shared_ptr<GridKernel> compute_grid_kernel(const KernelSpec &unit, const in
                 v[((std::size_t) (a[0] * m + i) * nc1 + a[1] * m + j) * nc2 + a[2] * m + l];
           }
       fftw_execute_dft_r2c(plan, grid, spec);
-      for (int f = 0; f < g->nraw; ++f) z[(std::size_t) cls * g->nfreq + f] = std::complex<double>(spec[f][0], spec[f][1]) * norm;
+      for (int f = 0; f < g->nraw; ++f) z[at * g->nfreq + f] = std::complex<double>(spec[f][0], spec[f][1]) * norm;
     }
     std::lock_guard<std::mutex> lock(fftw_mutex());
     fftw_destroy_plan(plan);
@@ -237,7 +344,7 @@ std::shared_ptr<GridKernel> compute_grid_kernel(const KernelSpec &unit, const in
     auto *col = reinterpret_cast<fftw_complex *>(z + f);
     fftw_execute_dft((fftw_plan) g->plan_fwd, col, col);
   }
-  g->hat.assign(z, z + (std::size_t) g->nfreq * kc);
+  g->hat.assign(z, z + (std::size_t) g->nfreq * ns);
   grid_free(z);
   return g;
 }
@@ -245,21 +352,21 @@ std::shared_ptr<GridKernel> compute_grid_kernel(const KernelSpec &unit, const in
 }    // namespace
 
 std::shared_ptr<const GridKernel> periodic_grid_kernel(const KernelSpec &unit, const int cells[3], int p,
-                                                       const double *cell_shape)
+                                                       const double *cell_shape, bool slab)
 {
   (void) fftw_mutex();    // constructed before the cache below, so destroyed after it (~GridKernel locks it)
   static std::mutex mtx;
-  using Key = std::tuple<double, int, int, int, int, double, double, double>;
+  using Key = std::tuple<double, int, int, int, int, double, double, double, bool>;
   static std::map<Key, std::shared_ptr<const GridKernel>> cache;
   const double one[3] = {1.0, 1.0, 1.0};
   const double *cs = cell_shape ? cell_shape : one;
   const Key key{unit.type == KernelType::Yukawa ? unit.kappa : -1.0, cells[0], cells[1], cells[2], p,
-                cs[0], cs[1], cs[2]};
+                cs[0], cs[1], cs[2], slab};
   std::lock_guard<std::mutex> lock(mtx);    // one computation per key, others wait for it
   auto it = cache.find(key);
   if (it != cache.end()) return it->second;
   if (cache.size() > 16) cache.clear();    // boxes that keep changing size (yukawa) or shape
-  auto g = compute_grid_kernel(unit, cells, p, cs);
+  auto g = compute_grid_kernel(unit, cells, p, cs, slab);
   cache[key] = g;
   return g;
 }

@@ -42,6 +42,15 @@ struct GridKernel {
   int k = 0, p = 0, nraw = 0, nfreq = 0;    // k: cells along the first axis (cubes: per side)
   int cells[3] = {0, 0, 0};                 // cells per axis
   double cell_shape[3] = {1.0, 1.0, 1.0};   // a cell's half-widths (largest 1)
+  bool slab = false;    // periodic in x and y, open in z (slab_ewald.h): a linear convolution in z
+  int nz = 0;           // slots along z of the convolution: cells[2], or 2 cells[2] (zero padded) for a slab
+  std::size_t slots() const { return (std::size_t) cells[0] * cells[1] * nz; }
+  // slot of cell (a0 ky + a1) kz + a2 in the convolution buffer
+  std::size_t slot(int b) const
+  {
+    const int kz = cells[2];
+    return (std::size_t) (b / kz) * nz + b % kz;
+  }
   std::vector<std::complex<double>> hat;
   double quad = 0.0;    // quadratic part of G_per in unit-grid coordinates: 2 pi / (3 V), V = (2k)^3 for cubes
   void *plan_fwd = nullptr, *plan_bwd = nullptr;    // DFTs over the cells of 16 frequency rows
@@ -101,7 +110,7 @@ inline int grid_neighbour_cell(int b, int k, int dx, int dy, int dz, signed char
 // (periodic.h). cell_shape: the half-widths of a cell (largest 1; null: cubic cells), whose
 // largest is 1 in unit-grid coordinates.
 std::shared_ptr<const GridKernel> periodic_grid_kernel(const KernelSpec &unit, const int cells[3], int p,
-                                                       const double *cell_shape);
+                                                       const double *cell_shape, bool slab = false);
 inline std::shared_ptr<const GridKernel> periodic_grid_kernel(const KernelSpec &unit, int k, int p)
 {
   const int cells[3] = {k, k, k};

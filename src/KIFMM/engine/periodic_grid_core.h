@@ -77,7 +77,8 @@ void FmmEvaluator<K>::evaluate_grid_distributed(Communicator &comm, std::size_t 
       for (int e = at; e < at + counts[r]; ++e)
         for (int o = 0; o < 27; ++o) {
           signed char sh[3];
-          near[grid_neighbour(all_cells[e], o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, sh)] = 1;
+          const int a = grid_neighbour(all_cells[e], o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, sh);
+          if (a >= 0) near[a] = 1;
         }
       for (std::size_t j = 0; j < own; ++j)
         if (near[own_cell[j]]) send[r].insert(send[r].end(), {sxyz[3 * j], sxyz[3 * j + 1], sxyz[3 * j + 2], sq[j]});
@@ -116,15 +117,18 @@ void FmmEvaluator<K>::evaluate_grid_distributed(Communicator &comm, std::size_t 
 template <class K> int FmmEvaluator<K>::grid_cell_of(const double *x) const
 {
   int cells[3];
-  grid_cells_per_axis(opt_.periodic_grid, opt_.root_shape, cells);
+  grid_cells_per_axis(opt_.periodic_grid, opt_.root_shape, cells, opt_.periodic_dims == 2);
   return grid_cell_index(x, opt_.root_center, opt_.root_half_width, opt_.root_shape, cells);
 }
 
+// The neighbour cell, -1 where there is none (a slab: beyond its faces in z)
 template <class K> int FmmEvaluator<K>::grid_neighbour(int b, int dx, int dy, int dz, signed char sh[3]) const
 {
   int cells[3];
-  grid_cells_per_axis(opt_.periodic_grid, opt_.root_shape, cells);
-  return grid_neighbour_cell(b, cells, dx, dy, dz, sh);
+  const bool slab = opt_.periodic_dims == 2;
+  grid_cells_per_axis(opt_.periodic_grid, opt_.root_shape, cells, slab);
+  const int c = grid_neighbour_cell(b, cells, dx, dy, dz, sh);
+  return slab && sh[2] != 0 ? -1 : c;
 }
 
 // Points sorted by cell (stable counting sort: within a cell the input order, so the own
@@ -170,7 +174,8 @@ template <class K> typename FmmEvaluator<K>::GridGeometry FmmEvaluator<K>::grid_
 {
   GridGeometry g;
   if (opt_.periodic_grid < 3) throw std::invalid_argument("kifmm: Options::periodic_grid needs at least 3 cells per side");
-  grid_cells_per_axis(opt_.periodic_grid, opt_.root_shape, g.k);
+  g.slab = opt_.periodic_dims == 2;
+  grid_cells_per_axis(opt_.periodic_grid, opt_.root_shape, g.k, g.slab);
   g.kc = g.k[0] * g.k[1] * g.k[2];
   g.H = opt_.root_half_width;
   g.h = g.H * grid_cell_shape(g.k, opt_.root_shape, g.cs);
@@ -261,7 +266,7 @@ template <class K> void FmmEvaluator<K>::grid_operators(const GridGeometry &g)
   const double tg = omp_get_wtime();
   KernelSpec unit;    // Laplace, or Yukawa with kappa * H (unit cell)
   if constexpr (std::is_same_v<K, YukawaKernel>) unit = KernelSpec{KernelType::Yukawa, k_.kappa * g.H};
-  grid_kernel_ = periodic_grid_kernel(unit, g.k, p_, g.cs);
+  grid_kernel_ = periodic_grid_kernel(unit, g.k, p_, g.cs, g.slab);
   stats_.t_precompute = t_setup + (omp_get_wtime() - tg);
   stats_.operator_bytes = ops_[0]->bytes() + grid_kernel_->bytes();
 }
@@ -304,7 +309,9 @@ template <class K> void FmmEvaluator<K>::grid_m2l(const GridGeometry &g, const s
   const GridKernel &gk = *grid_kernel_;
   const int nf = gk.nfreq, kc = g.kc;
   const double s = scale_[0];
-  std::complex<double> *z = grid_spectra_.get((std::size_t) nf * kc);
+  std::complex<double> *z = grid_spectra_.get((std::size_t) nf * gk.slots());
+  if (gk.slots() != (std::size_t) kc)    // a slab's zero padding along z
+    std::fill(z, z + (std::size_t) nf * gk.slots(), std::complex<double>(0.0));
   const int nblk = nf / 16;
 #pragma omp parallel
   {
@@ -312,7 +319,7 @@ template <class K> void FmmEvaluator<K>::grid_m2l(const GridGeometry &g, const s
     std::vector<double> chunk((std::size_t) nblk * 32);
 #pragma omp for schedule(static)
     for (int b = 0; b < kc; ++b) {
-      std::complex<double> *zb = z + (std::size_t) b * nf;
+      std::complex<double> *zb = z + gk.slot(b) * nf;
       if (occupied[b] == 0) {
         std::fill(zb, zb + nf, std::complex<double>(0.0));
         continue;
@@ -327,7 +334,7 @@ template <class K> void FmmEvaluator<K>::grid_m2l(const GridGeometry &g, const s
     for (int b = 0; b < kc; ++b) {
       if (tb[b + 1] == tb[b]) continue;
       for (int f = 0; f < nf; ++f) {
-        const std::complex<double> v = z[(std::size_t) b * nf + f];
+        const std::complex<double> v = z[gk.slot(b) * nf + f];
         chunk[(f / 16) * 32 + f % 16] = v.real();
         chunk[(f / 16) * 32 + 16 + f % 16] = v.imag();
       }
@@ -379,7 +386,7 @@ template <class K> std::size_t FmmEvaluator<K>::grid_near_mutual(const GridGeome
       MutualPair pr;
       pr.a = b;
       pr.b = grid_neighbour(b, o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, pr.shift);
-      if (sb[pr.b + 1] > sb[pr.b]) pairs.push_back(pr);
+      if (pr.b >= 0 && sb[pr.b + 1] > sb[pr.b]) pairs.push_back(pr);
     }
   }
   stats_.mutual_pairs = pairs.size();
@@ -414,6 +421,7 @@ template <class K> std::size_t FmmEvaluator<K>::grid_near_one_sided(const GridGe
       for (int o = 0; o < 27; ++o) {
         signed char sh[3];
         const int a = grid_neighbour(b, o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, sh);
+        if (a < 0) continue;
         for (std::size_t i = 0; i < n; ++i) {
           x[i] = tx_[t + i] - sh[0] * L[0];
           y[i] = ty_[t + i] - sh[1] * L[1];

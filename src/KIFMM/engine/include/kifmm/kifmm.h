@@ -48,8 +48,14 @@ struct Options {
   // for a net charge; Yukawa: the lattice sum. Needs fixed_root (see set_root, periodic.h).
   bool periodic = false;
   // Periodic only: 0 = octree; k >= 3 = one level of k^3 cells instead (periodic_grid.h;
-  // Laplace and Yukawa; evaluate() and evaluate_distributed(); cubic cells only).
+  // Laplace and Yukawa; evaluate() and evaluate_distributed(); rectangular cells: k cells along
+  // the longest edge, grid_cells_per_axis).
   int periodic_grid = 0;
+  // Periodic only: 3 = periodic in x, y and z; 2 = periodic in x and y, open in z (a slab,
+  // boundary p p f): the doubly periodic lattice sum (Laplace; no background: a net charge acts
+  // as a charged plane), with the single-level grid only (periodic_grid > 0); every point must
+  // lie within the fixed root's z extent.
+  int periodic_dims = 3;
   // Distributed evaluation: level of the global top tree (0 = from the number of ranks,
   // see distributed.h).
   int top_level = 0;
@@ -170,9 +176,12 @@ int max_grid_cells_long(int order, const double *shape);
 
 // Cells per axis of the grid with k cells along the longest axis of a periodic cell of this
 // shape (RootBox::shape, largest 1; null or a cube: k k k): round(k shape[d]), at least 3.
-inline void grid_cells_per_axis(int k, const double *shape, int cells[3])
+// open_z (a slab, Options::periodic_dims = 2): at least 1 cell along z.
+inline void grid_cells_per_axis(int k, const double *shape, int cells[3], bool open_z = false)
 {
-  for (int d = 0; d < 3; ++d) cells[d] = shape ? std::max(3, (int) std::lround(k * shape[d])) : k;
+  for (int d = 0; d < 3; ++d)
+    cells[d] = shape ? std::max(d == 2 && open_z ? 1 : 3, (int) std::lround(k * shape[d])) : k;
+  if (!shape && open_z) cells[2] = k;
 }
 // Half-widths of one cell (largest 1) and the largest one's length in units of the periodic
 // cell's half-width H: cell d has half-width H shape[d] / cells[d].

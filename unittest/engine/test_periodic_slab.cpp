@@ -1,0 +1,175 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
+// Slabs (periodic in x and y, open in z; Options::periodic_dims = 2): the doubly periodic Ewald
+// reference (slab_ewald.h) against the vacuum limit of the 3-d Ewald sum with the slab dipole
+// correction, and the single-level grid against that reference.
+#include "periodic.h"
+
+#include "fmm_core.h"
+#include "test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+using kifmm::KernelSpec;
+using kifmm::KernelType;
+using namespace kifmm_test;
+
+namespace {
+
+// Points uniform in [c - h shape, c + h shape) (charges in [-1, 1], made neutral unless shift).
+Points slab_points(std::size_t n, unsigned seed, const double c[3], double h, const double shape[3], double shift = 0)
+{
+  Points p = neutral(uniform_cube(n, seed));
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int d = 0; d < 3; ++d) p.xyz[3 * i + d] = c[d] + h * shape[d] * p.xyz[3 * i + d];
+    p.q[i] += shift;
+  }
+  return p;
+}
+
+kifmm::Options slab_options(int order, int grid, const double c[3], double h, const double shape[3])
+{
+  kifmm::Options o = periodic_options(order, 40, h, c, grid);
+  o.periodic_dims = 2;
+  for (int d = 0; d < 3; ++d) o.root_shape[d] = shape[d];
+  return o;
+}
+
+struct SlabErrors {
+  double pot, grad;
+};
+
+// the reference of these points in the slab of these options
+Reference slab_reference(const kifmm::Options &o, const Points &p)
+{
+  const std::size_t n = p.size();
+  Reference r{std::vector<double>(n), std::vector<double>(3 * n)};
+  kifmm::slab_direct_sum(o.root_center, o.root_half_width, o.root_shape, n, p.xyz.data(), p.q.data(), n, p.xyz.data(),
+                         r.pot.data(), r.grad.data());
+  return r;
+}
+
+SlabErrors slab_errors(const kifmm::Options &o, const Points &p, const Reference &ref)
+{
+  const std::size_t n = p.size();
+  std::vector<double> pot(n), g(3 * n);
+  kifmm::make_evaluator(KernelSpec{}, o)->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());
+  return {rel_l2(pot, ref.pot), rel_l2(g, ref.grad)};
+}
+
+}    // namespace
+
+// ---------------------------------------------------------------- the reference
+
+TEST(PeriodicSlab, ReferenceIsTheVacuumLimitOfEwaldWithTheSlabCorrection)
+{
+  // neutral charges in the slab |z| < 0.4 of the x-y cell [-1, 1)^2; the 3-d tin-foil Ewald sum
+  // of the cell stretched to a z period of 2 S (vacuum between the images) plus the dipole
+  // correction of Yeh and Berkowitz (grad_z += 4 pi M_z / V) converges to the doubly periodic
+  // sum as S grows
+  const double c[3] = {0, 0, 0}, shape[3] = {1.0, 1.0, 0.4};
+  Points p = slab_points(300, 61, c, 1.0, shape);
+  const std::size_t n = p.size();
+  std::vector<double> rp(n), rg(3 * n);
+  kifmm::slab_direct_sum(c, 1.0, shape, n, p.xyz.data(), p.q.data(), n, p.xyz.data(), rp.data(), rg.data());
+  double Mz = 0;
+  for (std::size_t i = 0; i < n; ++i) Mz += p.q[i] * p.xyz[3 * i + 2];
+  double prev = 1;
+  for (double S : {2.0, 4.0, 8.0}) {
+    // the 3-d cell of half-widths (S, S, S) * (1/S, 1/S, 1) = (1, 1, S)
+    const double sh[3] = {1.0 / S, 1.0 / S, 1.0};
+    std::vector<double> g(3 * n), v(n);
+    kifmm::periodic_direct_sum(KernelSpec{}, c, S, n, p.xyz.data(), p.q.data(), n, p.xyz.data(), v.data(), g.data(), sh);
+    const double V = 2.0 * 2.0 * 2.0 * S;
+    for (std::size_t i = 0; i < n; ++i) g[3 * i + 2] += 4 * M_PI * Mz / V;
+    const double e = rel_l2(g, rg);
+    std::printf("  slab vs 3-d Ewald + dipole correction, z period %4.1f: gradient %.2e\n", 2 * S, e);
+    EXPECT_LT(e, prev);
+    prev = e;
+  }
+  EXPECT_LT(prev, 1e-4);
+}
+
+TEST(PeriodicSlab, ReferenceIsPeriodicInXAndYAndItsGradientIsTheDerivative)
+{
+  const double c[3] = {0, 0, 0}, shape[3] = {1.0, 0.7, 0.5};
+  Points p = slab_points(40, 62, c, 1.0, shape, 0.1);    // net charge too
+  const double t[3] = {0.3, -0.2, 0.45};
+  double v0, g0[3];
+  kifmm::slab_direct_sum(c, 1.0, shape, p.size(), p.xyz.data(), p.q.data(), 1, t, &v0, g0);
+  for (int d = 0; d < 2; ++d) {
+    double ts[3] = {t[0], t[1], t[2]}, v, g[3];
+    ts[d] += 2.0 * shape[d];
+    kifmm::slab_direct_sum(c, 1.0, shape, p.size(), p.xyz.data(), p.q.data(), 1, ts, &v, g);
+    EXPECT_NEAR(v, v0, 1e-11 * std::fabs(v0) + 1e-12);
+  }
+  for (int d = 0; d < 3; ++d) {
+    const double e = 1e-5;
+    double tp[3] = {t[0], t[1], t[2]}, tm[3] = {t[0], t[1], t[2]}, vp, vm, g[3];
+    tp[d] += e;
+    tm[d] -= e;
+    kifmm::slab_direct_sum(c, 1.0, shape, p.size(), p.xyz.data(), p.q.data(), 1, tp, &vp, g);
+    kifmm::slab_direct_sum(c, 1.0, shape, p.size(), p.xyz.data(), p.q.data(), 1, tm, &vm, g);
+    EXPECT_NEAR((vp - vm) / (2 * e), g0[d], 1e-6 * (std::fabs(g0[d]) + 1)) << d;
+  }
+}
+
+// ---------------------------------------------------------------- the grid against the reference
+
+TEST(PeriodicSlab, GridMatchesTheDoublyPeriodicSum)
+{
+  struct Case {
+    double shape[3];
+    int k;
+    double shift;
+  };
+  // a flat slab, a tall one, a rectangular floor; neutral and with a net charge
+  const Case cases[] = {{{1.0, 1.0, 0.5}, 6, 0.0}, {{0.5, 0.5, 1.0}, 6, 0.0}, {{1.0, 0.6, 0.4}, 5, 0.0},
+                        {{1.0, 1.0, 0.5}, 6, 0.3}};
+  const double c[3] = {0.5, -1.0, 2.0};
+  for (const Case &cs : cases) {
+    Points p = slab_points(400, 63, c, 1.5, cs.shape, cs.shift);
+    const Reference ref = slab_reference(slab_options(6, cs.k, c, 1.5, cs.shape), p);
+    for (int order : {6, 9}) {
+      const SlabErrors e = slab_errors(slab_options(order, cs.k, c, 1.5, cs.shape), p, ref);
+      std::printf("  slab grid k=%d box %.2f %.2f %.2f net %.1f p=%d: pot %.2e grad %.2e\n", cs.k, cs.shape[0],
+                  cs.shape[1], cs.shape[2], cs.shift, order, e.pot, e.grad);
+      EXPECT_LT(e.grad, order == 6 ? 3e-5 : 3e-7);
+      EXPECT_LT(e.pot, order == 6 ? 3e-5 : 3e-7);
+    }
+  }
+}
+
+TEST(PeriodicSlab, LayerOnTheFloor)
+{
+  // a dense layer at the bottom of a tall cell (a sediment): most cells empty
+  const double c[3] = {0, 0, 0}, shape[3] = {1.0, 1.0, 1.0};
+  Points p = slab_points(600, 64, c, 1.0, shape);
+  for (std::size_t i = 0; i < p.size(); ++i) p.xyz[3 * i + 2] = -1.0 + 0.1 * (p.xyz[3 * i + 2] + 1.0);
+  const kifmm::Options o = slab_options(8, 5, c, 1.0, shape);
+  const SlabErrors e = slab_errors(o, p, slab_reference(o, p));
+  std::printf("  slab grid floor layer p=8: pot %.2e grad %.2e\n", e.pot, e.grad);
+  EXPECT_LT(e.grad, 1e-6);
+}
+
+TEST(PeriodicSlab, WhatIsNotSupportedThrows)
+{
+  const double c[3] = {0, 0, 0}, shape[3] = {1.0, 1.0, 0.5};
+  Points p = slab_points(200, 65, c, 1.0, shape);
+  std::vector<double> g(3 * p.size());
+  auto eval = [&](const kifmm::Options &o, const KernelSpec &k = KernelSpec{}) {
+    kifmm::make_evaluator(k, o)->evaluate(p.size(), p.xyz.data(), p.q.data(), p.size(), p.xyz.data(), nullptr,
+                                           g.data());
+  };
+  EXPECT_THROW(eval(slab_options(6, 0, c, 1.0, shape)), std::invalid_argument);    // the octree
+  EXPECT_THROW(eval(slab_options(6, 6, c, 1.0, shape), KernelSpec{KernelType::Yukawa, 2.0}), std::invalid_argument);
+  Points out = p;
+  out.xyz[2] = 0.6;    // above the slab's z extent
+  std::vector<double> g2(3 * out.size());
+  EXPECT_THROW(kifmm::make_evaluator(KernelSpec{}, slab_options(6, 6, c, 1.0, shape))
+                   ->evaluate(out.size(), out.xyz.data(), out.q.data(), out.size(), out.xyz.data(), nullptr, g2.data()),
+               std::invalid_argument);
+}

@@ -271,7 +271,7 @@ void KSpaceKIFMM::init()
     mesg += fmt::format("  kernel = {}", kifmm_lammps::kernel_name(kset.kernel));
     if (kset.kernel == LongRangeKernel::Gravity) mesg += fmt::format(" (G = {:.8g})", kset.gravity_G);
     if (kset.kernel == LongRangeKernel::Yukawa) mesg += fmt::format(" (kappa = {:.8g})", kset.kappa);
-    const bool grid_only = periodic && !kifmm::octree_fits_cell(engine_options.root_shape);
+    const bool grid_only = periodic && (slab || !kifmm::octree_fits_cell(engine_options.root_shape));
     if (tree_choice_pending && grid_only)
       mesg += fmt::format("\n  order = {}, single-level grid chosen from the atom positions at the first "
                           "evaluation (a box that is not nearly cubic: grids of nearly cubic cells, least "

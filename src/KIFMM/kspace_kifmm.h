@@ -106,6 +106,7 @@ class KSpaceKIFMM : public KSpace {
   void check_memory(std::size_t nsources);
   // periodic boundaries (kspace_kifmm_periodic.cpp)
   bool periodic = false;
+  bool slab = false;    // boundary p p f (or p p s/m): periodic in x and y only
   bool warned_periodic_virial = false;
   bool warned_octree_fallback = false;    // a box no grid fits at this order (fit_periodic_box)
   int scalar_pressure_written = -1, scalar_pressure_user = -1;    // pressure/scalar (periodic_init)

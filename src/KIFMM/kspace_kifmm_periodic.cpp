@@ -44,12 +44,23 @@ void KSpaceKIFMM::periodic_init()
     scalar_pressure_flag = scalar_pressure_written = 0;
     return;
   }
-  if (!(domain->xperiodic && domain->yperiodic && domain->zperiodic))
+  // p p p, or a slab: p p f (p p s, p p m), periodic in x and y and open in z
+  slab = domain->xperiodic && domain->yperiodic && !domain->zperiodic;
+  if (!(domain->xperiodic && domain->yperiodic && domain->zperiodic) && !slab)
     error->all(FLERR,
-               "kspace_style kifmm: periodic boundaries are not supported yet for mixed "
-               "periodicity (boundary {} {} {}); use p p p, or f, s or m in every dimension",
+               "kspace_style kifmm: periodic boundaries are not supported for this mixed "
+               "periodicity (boundary {} {} {}); use p p p, p p f (a slab: open in z), or f, s or "
+               "m in every dimension",
                boundary_name(domain->boundary[0][0]), boundary_name(domain->boundary[1][0]),
                boundary_name(domain->boundary[2][0]));
+  if (slab && kset.kernel != LongRangeKernel::Coulomb)
+    error->all(FLERR,
+               "kspace_style kifmm: kernel {} with boundary p p {} (a slab) is not supported; the "
+               "doubly periodic sum is implemented for kernel coulomb",
+               kifmm_lammps::kernel_name(kset.kernel), boundary_name(domain->boundary[2][0]));
+  if (slab && kset.grid == 0)
+    error->all(FLERR, "kspace_style kifmm: 'kspace_modify kifmm grid no' (the octree) is not available "
+                      "with boundary p p f: a slab uses the single-level grid");
   if (kset.kernel == LongRangeKernel::Gravity && !kset.jeans)
     error->all(FLERR,
                "kspace_style kifmm: kernel gravity with periodic boundaries diverges (the mean "
@@ -65,8 +76,17 @@ void KSpaceKIFMM::periodic_init()
                "periodic boundaries: only the trace of the periodic virial (the scalar pressure) "
                "is computed, not its tensor components");
   scalar_pressure_flag = scalar_pressure_written = 1;
+  // net charge of a slab: no background, the doubly periodic sum of the charges as they are
+  if (slab && std::fabs(qsum) > 1.0e-5 && comm->me == 0)
+    error->warning(FLERR,
+                   "kspace_style kifmm: slab (boundary p p f) with net charge {:.8g}: the doubly "
+                   "periodic sum is taken as it is, without a neutralizing background (far from the "
+                   "slab the field is that of a uniformly charged plane, 2 pi Q / A on either side); "
+                   "kspace_modify slab of ewald/pppm instead adds a uniform background in the "
+                   "enlarged box",
+                   qsum);
   // net charge: like ewald/pppm, a uniform neutralizing background (energy included)
-  if (kset.kernel == LongRangeKernel::Coulomb && std::fabs(qsum) > 1.0e-5 && comm->me == 0)
+  else if (kset.kernel == LongRangeKernel::Coulomb && std::fabs(qsum) > 1.0e-5 && comm->me == 0)
     error->warning(FLERR,
                    "kspace_style kifmm: periodic system with net charge {:.8g}: a uniform "
                    "neutralizing background is included (energy -pi Q^2/(2 V alpha^2) as in "
@@ -90,6 +110,7 @@ void KSpaceKIFMM::periodic_root(kifmm::Options &o) const
   periodic_box(c, hw);
   const double h = std::max(hw[0], std::max(hw[1], hw[2]));
   o.fixed_root = true;
+  o.periodic_dims = slab ? 2 : 3;
   o.root_half_width = h;
   for (int d = 0; d < 3; ++d) {
     o.root_center[d] = c[d];
@@ -101,14 +122,15 @@ void KSpaceKIFMM::periodic_root(kifmm::Options &o) const
 std::string KSpaceKIFMM::grid_cells_text(const kifmm::Options &o) const
 {
   int c[3];
-  kifmm::grid_cells_per_axis(o.periodic_grid, o.root_shape, c);
-  if (c[0] == c[1] && c[1] == c[2]) return fmt::format("{}^3", c[0]);
+  kifmm::grid_cells_per_axis(o.periodic_grid, o.root_shape, c, o.periodic_dims == 2);
+  if (c[0] == c[1] && c[1] == c[2] && o.periodic_dims == 3) return fmt::format("{}^3", c[0]);
   return fmt::format("{} x {} x {}", c[0], c[1], c[2]);
 }
 
 // The octree fits a nearly cubic box; a grid, cells that are nearly cubic.
 bool KSpaceKIFMM::periodic_fits(const kifmm::Options &o) const
 {
+  if (o.periodic_dims == 2) return o.periodic_grid > 0 && kifmm::grid_fits_cell(o.order, o.periodic_grid, o.root_shape, true);
   return o.periodic_grid > 0 ? kifmm::grid_fits_cell(o.order, o.periodic_grid, o.root_shape)
                              : kifmm::octree_fits_cell(o.root_shape);
 }
@@ -129,11 +151,12 @@ void KSpaceKIFMM::fit_periodic_box(kifmm::Options &o)
                kifmm::max_cell_aspect, L[0], L[1], L[2], update->ntimestep);
   if (o.periodic_grid > 0 && kset.grid > 0) {
     int c[3];
-    kifmm::grid_cells_per_axis(o.periodic_grid, o.root_shape, c);
+    const bool open_z = o.periodic_dims == 2;
+    kifmm::grid_cells_per_axis(o.periodic_grid, o.root_shape, c, open_z);
     std::string fit;
     int listed = 0;
     for (int k = 3; k <= kifmm::max_grid_cells_long(o.order, o.root_shape) && listed < 6; ++k)
-      if (kifmm::grid_fits_cell(o.order, k, o.root_shape)) {
+      if (kifmm::grid_fits_cell(o.order, k, o.root_shape, open_z)) {
         fit += (listed++ ? ", " : "") + std::to_string(k);
       }
     error->all(FLERR,
@@ -145,11 +168,13 @@ void KSpaceKIFMM::fit_periodic_box(kifmm::Options &o)
                kifmm::grid_cell_aspect(c, o.root_shape), kifmm::max_cell_aspect, o.order,
                fit.empty() ? std::string("none") : fit);
   }
-  o.periodic_grid = kifmm::choose_tree(o.order, tree_request.n, true, true, o.root_shape).grid;
+  o.periodic_grid = o.periodic_dims == 2 ? kifmm::choose_slab_grid(o.order, tree_request.n, o.root_shape).grid
+                                         : kifmm::choose_tree(o.order, tree_request.n, true, true, o.root_shape).grid;
   // no grid fits (high orders, whose grids are large): the octree in a box within twice the
   // tolerance, its error measured as always when an accuracy is requested
   const double aspect = 1.0 / std::min(o.root_shape[0], std::min(o.root_shape[1], o.root_shape[2]));
-  if (o.periodic_grid == 0 && aspect <= 1.0 + 2 * (kifmm::max_cell_aspect - 1.0) && kset.grid < 0) {
+  if (o.periodic_grid == 0 && o.periodic_dims == 3 && aspect <= 1.0 + 2 * (kifmm::max_cell_aspect - 1.0) &&
+      kset.grid < 0) {
     if (comm->me == 0 && !warned_octree_fallback)
       error->warning(FLERR,
                      "kspace_style kifmm: at order {} no single-level grid of nearly cubic cells fits the "

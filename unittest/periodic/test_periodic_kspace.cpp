@@ -79,15 +79,19 @@ class Periodic : public LammpsFixture {
   // LAMMPS ewald k-space part + exact real space (see the file comment). alpha*L = 9 and
   // kmax = 20 converge both parts to ~1e-16 (rectangular boxes: L the shortest edge, kmax in
   // proportion to the edges).
-  Result ewald_reference()
+  // slab > 0 (boundary p p f): ewald with kspace_modify slab of that factor (the box enlarged in
+  // z, the dipole correction of Yeh and Berkowitz), real space without images in z
+  Result ewald_reference(double slab = 0)
   {
     const double Lb[3] = {lmp->domain->xprd, lmp->domain->yprd, lmp->domain->zprd};
     const double Lmin = std::min(Lb[0], std::min(Lb[1], Lb[2])), alpha = 9.0 / Lmin, rc = 0.7 * Lmin;
     int km[3];
-    for (int d = 0; d < 3; ++d) km[d] = (int) std::ceil(20.0 * Lb[d] / Lmin - 1e-9);
+    for (int d = 0; d < 3; ++d) km[d] = (int) std::ceil(20.0 * Lb[d] * (d == 2 && slab > 0 ? slab : 1.0) / Lmin - 1e-9);
     commands(fmt_cmd("pair_style coul/long {}\npair_coeff * *\npair_modify compute no\n"
-                     "kspace_style ewald 1e-14\nkspace_modify gewald {} kmax/ewald {} {} {}\nrun 0 post no",
+                     "kspace_style ewald 1e-14\nkspace_modify gewald {} kmax/ewald {} {} {}\n",
                      rc, alpha, km[0], km[1], km[2]));
+    if (slab > 0) command(fmt_cmd("kspace_modify slab {}", slab));
+    command("run 0 post no");
     Result r{forces_by_id(), thermo("elong")};
     for (int k = 0; k < 3; ++k) r.wdiag[k] = lmp->force->kspace->virial[k];
     EXPECT_DOUBLE_EQ(lmp->force->kspace->g_ewald, alpha);
@@ -103,7 +107,7 @@ class Periodic : public LammpsFixture {
       for (int j = 0; j < n; ++j)
         for (int a = -1; a <= 1; ++a)
           for (int b = -1; b <= 1; ++b)
-            for (int c = -1; c <= 1; ++c) {
+            for (int c = slab > 0 ? 0 : -1; c <= (slab > 0 ? 0 : 1); ++c) {
               if (i == j && a == 0 && b == 0 && c == 0) continue;
               const double d[3] = {pos[i][0] - pos[j][0] + a * Lb[0], pos[i][1] - pos[j][1] + b * Lb[1],
                                    pos[i][2] - pos[j][2] + c * Lb[2]};
@@ -576,6 +580,45 @@ TEST_F(Periodic, BoxChangingShapeSwitchesFromTheOctreeToAGrid)
   EXPECT_LE(rel(r.energy, ref.energy), 1e-9);
 }
 
+// ---------------------------------------------------------------- slabs (p p f)
+
+// the doubly periodic sum against ewald with kspace_modify slab: equal at a large slab factor
+// (the slab correction's own error decays with the vacuum: at factor 3 it is far larger)
+TEST_F(Periodic, SlabEqualsEwaldWithALargeSlabFactor)
+{
+  load(uniform_cube(600, 70), "p p f");
+  command("change_box all z final 0 0.6 remap units box");
+  const Result ref10 = ewald_reference(10.0), ref3 = ewald_reference(3.0);
+  commands("kspace_style none\npair_style zero 0.01\npair_coeff * *\nkspace_style kifmm 1e-10");
+  const std::string out = output_of("run 0 post no");
+  Result r{forces_by_id(), thermo("elong")};
+  const double ef = relative_force_error(r.f, ref10.f), ee = rel(r.energy, ref10.energy);
+  const double ef3 = relative_force_error(r.f, ref3.f), ee3 = rel(r.energy, ref3.energy);
+  if (rank() == 0)
+    std::printf("  slab vs ewald slab 10: force %.2e energy %.2e; vs ewald slab 3: force %.2e energy %.2e\n", ef, ee,
+                ef3, ee3);
+  EXPECT_LE(ef, 1e-8);
+  EXPECT_LE(ee, 1e-8);
+  EXPECT_GT(ef3, 10 * ef);
+  if (rank() == 0) EXPECT_NE(out.find("single-level grid of"), std::string::npos) << out;
+  // and the measured error meets the request
+  const Result r7 = kifmm("1e-6");
+  EXPECT_LE(relative_force_error(r7.f, ref10.f), 1e-6);
+}
+
+TEST_F(Periodic, SlabNetChargeWarnsAndUnsupportedSettingsAreErrors)
+{
+  Configuration c = uniform_cube(201, 71);    // odd: net charge 1
+  load(c, "p p f");
+  commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-5");
+  const std::string out = output_of("run 0 post no");
+  if (rank() == 0) EXPECT_NE(out.find("without a neutralizing background"), std::string::npos) << out;
+  command("kspace_modify kifmm grid no");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "grid no' \\(the octree\\) is not available with boundary p p f");
+  command("kspace_modify kifmm grid auto kernel gravity 1.0 jeans yes");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "kernel gravity with boundary p p f \\(a slab\\) is not supported");
+}
+
 TEST_F(Periodic, TriclinicIsAnError)
 {
   load(uniform_cube(50, 53));
@@ -585,9 +628,9 @@ TEST_F(Periodic, TriclinicIsAnError)
 
 TEST_F(Periodic, MixedPeriodicityIsAnError)
 {
-  load(uniform_cube(50, 54), "p p f");
+  load(uniform_cube(50, 54), "f p p");    // periodic in y and z only (p p f is a slab)
   commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4");
-  EXPECT_LAMMPS_ERROR(command("run 0"), "mixed periodicity \\(boundary p p f\\)");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "mixed periodicity \\(boundary f p p\\)");
 }
 
 TEST_F(Periodic, GridNeedsPeriodicBoundaries)

@@ -388,12 +388,36 @@ bool octree_fits_cell(const double shape[3])
   return 1.0 / std::min(shape[0], std::min(shape[1], shape[2])) <= max_cell_aspect * (1 + 1e-12);
 }
 
-bool grid_fits_cell(int order, int k, const double shape[3])
+bool grid_fits_cell(int order, int k, const double shape[3], bool open_z)
 {
   if (k < 3 || k > max_grid_cells_long(order, shape)) return false;
   int kd[3];
-  grid_cells_per_axis(k, shape, kd);
+  grid_cells_per_axis(k, shape, kd, open_z);
+  if (open_z && (double) kd[0] * kd[1] * 2 * kd[2] > grid_memory_cells(order)) return false;    // zero padding
   return grid_cell_aspect(kd, shape) <= max_cell_aspect * (1 + 1e-12);
+}
+
+TreeChoice choose_slab_grid(int order, std::size_t n, const double shape[3])
+{
+  TreeChoice g{choose_tree(order, n, false).leaf_size, 0, 0.0, 0};
+  for (int k = 3; k <= max_grid_cells_long(order, shape); ++k) {
+    if (!grid_fits_cell(order, k, shape, true)) continue;
+    int kd[3];
+    grid_cells_per_axis(k, shape, kd, true);
+    // uniform counts of the cells (the near field of the z boundary cells counted as inside)
+    TreeCounts t;
+    const double cells = (double) kd[0] * kd[1] * kd[2], m = (double) n / cells;
+    t.near_pairs = 27 * cells * m * m / 2;
+    t.self_pairs = cells * m * m / 2;
+    t.entries = 14 * cells;
+    t.cells = (double) kd[0] * kd[1] * 2 * kd[2];    // the padded convolution
+    const double c = modelled_grid_cost(order, n, t);
+    if (g.grid == 0 || c < g.cost) {
+      g.cost = c;
+      g.grid = k;
+    }
+  }
+  return g;
 }
 
 TreeChoice choose_tree(int order, std::size_t n, bool periodic, bool grid, const double *shape)
@@ -494,6 +518,7 @@ TreeChoice model_tree(const KernelSpec &kernel, const Options &options, std::siz
 
 TreeChoice choose_tree(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz)
 {
+  if (options.periodic && options.periodic_dims == 2) return choose_slab_grid(options.order, n, options.root_shape);
   const double *shape = options.fixed_root ? options.root_shape : nullptr;
   if (options.periodic && shape && !octree_fits_cell(shape)) {
     // only grids: the one of least modelled cost on the actual occupancies

@@ -20,6 +20,14 @@ TreePlan plan_tree(const Options &options, const TreeRequest &request, const Opt
   plan.options = options;
   Options &opt = plan.options;
   opt.periodic_grid = options.periodic && request.grid > 0 ? request.grid : 0;
+  if (options.periodic && options.periodic_dims == 2) {    // a slab: the grid only, for uniform points
+    if (request.leaf_size > 0) opt.leaf_size = request.leaf_size;
+    if (request.grid <= 0) {
+      plan.uniform = choose_slab_grid(opt.order, request.n, opt.root_shape);
+      opt.periodic_grid = plan.uniform.grid;
+    }
+    return plan;
+  }
   if (request.leaf_size > 0) {
     opt.leaf_size = request.leaf_size;
     return plan;

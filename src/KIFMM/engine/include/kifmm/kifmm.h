@@ -167,7 +167,11 @@ TreeChoice choose_tree(int order, std::size_t n, bool periodic, bool grid = fals
 // within the grid's memory bound at this order).
 constexpr double max_cell_aspect = 1.05;
 bool octree_fits_cell(const double shape[3]);
-bool grid_fits_cell(int order, int k, const double shape[3]);
+bool grid_fits_cell(int order, int k, const double shape[3], bool open_z = false);
+// A slab (Options::periodic_dims = 2, open_z cells per axis): the grid of least modelled cost
+// for n uniformly spread points among those whose cells fit (grid 0: none fits). plan_tree and
+// choose_tree take it for slabs.
+TreeChoice choose_slab_grid(int order, std::size_t n, const double shape[3]);
 // Cells along the longest axis of the grids that fit in the memory bound at this order (kernels
 // and convolution buffer at most 64 MB each) in a cell of this shape: 3 .. this. (In cubes and
 // nearly cubic cells, where the octree is the alternative, choose_tree offers grids only at the

@@ -85,7 +85,8 @@ struct Result {
 // the rectangular cell of half-widths periodic_half * shape[d])
 template <class K>
 Result compare(const K &k, const kifmm::KernelSpec &spec, const Points &all, const Partition &part, int top_level,
-               int leaf = 24, int order = 6, double periodic_half = 0.0, int grid = 0, const double *shape = nullptr)
+               int leaf = 24, int order = 6, double periodic_half = 0.0, int grid = 0, const double *shape = nullptr,
+               int periodic_dims = 3)
 {
   const int me = rank_of_world(), np = size_of_world();
   kifmm::Options o;
@@ -99,6 +100,7 @@ Result compare(const K &k, const kifmm::KernelSpec &spec, const Points &all, con
     o.periodic_grid = grid;
     if (shape)
       for (int d = 0; d < 3; ++d) o.root_shape[d] = shape[d];
+    o.periodic_dims = periodic_dims;
   }
   kifmm::FmmEvaluator<K> serial(k, spec, o), dist(k, spec, o);
   const std::size_t n = all.size();
@@ -154,12 +156,12 @@ const Partition kPartitions[] = {slabs_last_empty, blocks, random_owner, all_on_
 const char *kPartitionNames[] = {"slabs (last rank empty)", "blocks", "random", "all on the last rank"};
 
 void check_all_partitions(const Points &p, int top_level, int leaf = 24, double periodic_half = 0.0, int order = 6,
-                          int grid = 0, const double *shape = nullptr)
+                          int grid = 0, const double *shape = nullptr, int periodic_dims = 3)
 {
   kifmm::LaplaceKernel k;
   kifmm::KernelSpec spec;
   for (int j = 0; j < 4; ++j) {
-    Result r = compare(k, spec, p, kPartitions[j], top_level, leaf, order, periodic_half, grid, shape);
+    Result r = compare(k, spec, p, kPartitions[j], top_level, leaf, order, periodic_half, grid, shape, periodic_dims);
     EXPECT_LE(r.grad, 1e-10) << kPartitionNames[j] << ", top level " << top_level << ", grid " << grid;
     EXPECT_LE(r.pot, 1e-10) << kPartitionNames[j] << ", top level " << top_level << ", grid " << grid;
   }
@@ -435,6 +437,21 @@ TEST(Distributed, PeriodicRectangularCellsEqualSerial)
   Points nc = in_box(uniform_cube(2000, 40), slab);
   for (double &q : nc.q) q = std::fabs(q);    // net charge: background moments and wrap marginals
   check_all_partitions(nc, 0, 24, 1.0, 6, 10, slab);
+}
+
+// A slab (periodic in x and y, open in z): no ghosts across the z faces
+TEST(Distributed, SlabEqualsSerial)
+{
+  const double slab[3] = {1.0, 1.0, 0.5}, tall[3] = {0.5, 0.5, 1.0};
+  auto in_box = [](Points p, const double shape[3]) {
+    for (std::size_t i = 0; i < p.size(); ++i)
+      for (int d = 0; d < 3; ++d) p.xyz[3 * i + d] *= shape[d];
+    return p;
+  };
+  check_all_partitions(in_box(neutral(uniform_cube(1500, 41)), slab), 0, 24, 1.0, 6, 6, slab, 2);
+  Points nc = in_box(uniform_cube(1500, 42), tall);
+  for (double &q : nc.q) q = std::fabs(q);    // net charge
+  check_all_partitions(nc, 0, 24, 1.0, 6, 6, tall, 2);
 }
 
 TEST(Distributed, PeriodicFewPointsEqualSerial)

@@ -4,6 +4,7 @@
 #include "periodic.h"
 #include "slab_ewald.h"
 
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <vector>
@@ -91,6 +92,32 @@ void slab_direct_sum(const double center[3], double h, const double *shape, std:
     if (grad)
       for (int d = 0; d < 3; ++d) grad[3 * i + d] = g[d] / (h * h);
   }
+}
+
+void slab_gradient_via_3d(const double center[3], double h, const double *shape, std::size_t n_src,
+                          const double *src_xyz, const double *src_q, std::size_t n_trg, const double *trg_xyz,
+                          double *grad)
+{
+  const double one[3] = {1.0, 1.0, 1.0};
+  const double *sh = shape ? shape : one;
+  const double hw[3] = {h * sh[0], h * sh[1], h * sh[2]};
+  const double Hz = hw[2] + 4.0 * std::max(hw[0], hw[1]);    // vacuum 2 (Hz - hz) = 8 max half-width
+  const double H = std::max(std::max(hw[0], hw[1]), Hz);
+  const double s3[3] = {hw[0] / H, hw[1] / H, Hz / H};
+  // points wrapped in x and y only (z stays inside the slab)
+  std::vector<double> su(3 * n_src), tu(3 * n_trg);
+  for (std::size_t i = 0; i < n_src; ++i)
+    for (int d = 0; d < 3; ++d) su[3 * i + d] = src_xyz[3 * i + d];
+  for (std::size_t i = 0; i < n_trg; ++i)
+    for (int d = 0; d < 3; ++d) tu[3 * i + d] = trg_xyz[3 * i + d];
+  periodic_direct_sum(KernelSpec{}, center, H, n_src, su.data(), src_q, n_trg, tu.data(), nullptr, grad, s3);
+  double Q = 0, Mz = 0;
+  for (std::size_t j = 0; j < n_src; ++j) {
+    Q += src_q[j];
+    Mz += src_q[j] * (src_xyz[3 * j + 2] - center[2]);
+  }
+  const double V = 8.0 * hw[0] * hw[1] * Hz;
+  for (std::size_t i = 0; i < n_trg; ++i) grad[3 * i + 2] += 4 * kPi / V * (Mz - Q * (trg_xyz[3 * i + 2] - center[2]));
 }
 
 }    // namespace kifmm

@@ -18,6 +18,21 @@ constexpr double kPeriod = 2.0;                    // unit cube: half-width 1
 constexpr double kVolume = 8.0;
 constexpr double kRealCut = 2.3;                   // Ewald real-space terms beyond: < exp(-47)
 
+// Laplace real-space term of the split with parameter alpha: phi(r) = erfc(alpha r) / r and
+// F = phi'(r) / r; reg: phi minus the bare 1/r (shared with slab_ewald.h).
+inline void laplace_real(double alpha, double r, bool reg, double &v, double &F)
+{
+  const double ar = alpha * r;
+  const double gauss = (2 * alpha / kSqrtPi) * std::exp(-ar * ar);
+  if (reg) {
+    v = -std::erf(ar) / r;
+    F = (std::erf(ar) / (r * r) - gauss / r) / r;
+  } else {
+    v = std::erfc(ar) / r;
+    F = (-std::erfc(ar) / (r * r) - gauss / r) / r;
+  }
+}
+
 // Ewald split (or direct image sum) of the unit-cell lattice sum of one kernel.
 struct Split {
   bool yukawa = false, direct = false;
@@ -90,18 +105,12 @@ struct Split {
       F = -e * (1 + kappa * r) / (r * r * r);
       return;
     }
-    const double ar = alpha * r;
-    const double gauss = (2 * alpha / kSqrtPi) * std::exp(-ar * ar - a * a);
     if (!yukawa) {
-      if (reg) {
-        v = -std::erf(ar) / r;
-        F = (std::erf(ar) / (r * r) - gauss / r) / r;
-      } else {
-        v = std::erfc(ar) / r;
-        F = (-std::erfc(ar) / (r * r) - gauss / r) / r;
-      }
+      laplace_real(alpha, r, reg, v, F);
       return;
     }
+    const double ar = alpha * r;
+    const double gauss = (2 * alpha / kSqrtPi) * std::exp(-ar * ar - a * a);
     const double A = std::exp(kappa * r) * std::erfc(ar + a);
     if (reg) {
       const double C = std::exp(-kappa * r) * std::erfc(a - ar);

@@ -84,18 +84,7 @@ struct SlabSplit {
     dv = -(2 * kPi / area) * std::erf(alpha * z);
   }
   // real-space term (Laplace) phi(r) and F = phi'(r) / r; reg = phi minus the bare 1/r
-  void real(double r, bool reg, double &v, double &F) const
-  {
-    const double ar = alpha * r;
-    const double gauss = (2 * alpha / kSqrtPi) * std::exp(-ar * ar);
-    if (reg) {
-      v = -std::erf(ar) / r;
-      F = (std::erf(ar) / (r * r) - gauss / r) / r;
-    } else {
-      v = std::erfc(ar) / r;
-      F = (-std::erfc(ar) / (r * r) - gauss / r) / r;
-    }
-  }
+  void real(double r, bool reg, double &v, double &F) const { laplace_real(alpha, r, reg, v, F); }
   double reg0() const { return -2 * alpha / kSqrtPi; }
 };
 

@@ -86,6 +86,8 @@ template <class K> class FmmEvaluator : public Evaluator {
   const Options &options() const override { return opt_; }
   void set_root(const double center[3], double half_width) override;
   void set_root_box(const double center[3], const double half_widths[3]) override;
+  void periodic_virial_fields(Communicator *comm, std::size_t n, const double *xyz, const double *q, double *offset,
+                              double *psi) override;
 
   // Internals of the last evaluation (tests).
   const Octree &tree() const { return tree_; }
@@ -263,7 +265,9 @@ template <class K> class FmmEvaluator : public Evaluator {
   void grid_reduce(Communicator *comm, double *v, std::size_t m);    // sum over ranks (comm null: none)
   void grid_operators(const GridGeometry &g);
   void grid_p2m(const GridGeometry &g);
-  void grid_m2l(const GridGeometry &g, const std::vector<double> &occupied);
+  void grid_m2l(const GridGeometry &g, const std::vector<double> &occupied, const GridKernel &gk, double s);
+  // periodic virial (periodic_grid_virial_core.h): the offset-weighted field after an evaluation
+  void grid_offset_field(Communicator *comm, double *psi_sorted);
   void grid_l2p(const GridGeometry &g, bool want_pot);
   std::size_t grid_near_mutual(const GridGeometry &g, bool want_pot);
   std::size_t grid_near_one_sided(const GridGeometry &g, bool want_pot);
@@ -806,4 +810,5 @@ template <class K> void FmmEvaluator<K>::open_plan_mutual(const std::vector<char
 
 #include "periodic_core.h"       // periodic passes (member templates)
 #include "periodic_grid_core.h"  // periodic single-level grid (member template)
+#include "periodic_grid_virial_core.h"  // periodic virial on the grid (member template)
 #include "distributed_core.h"    // distributed evaluation (member template)

@@ -61,7 +61,8 @@ namespace {
 // unit cell of half-widths k_d cs_d / K: real-space terms (the excluded near images in regular
 // form, -erf / rho), the reciprocal sum (separable on the tensor grid: three contractions) and
 // the background. v[(x * nc1 + y) * nc2 + z].
-std::vector<double> grid_kernel_values(const KernelSpec &unit, const int k[3], int p, const double cs[3])
+std::vector<double> grid_kernel_values(const KernelSpec &unit, const int k[3], int p, const double cs[3],
+                                       std::vector<double> *moment = nullptr)
 {
   double K = 0, box[3];
   for (int d = 0; d < 3; ++d) K = std::max(K, k[d] * cs[d]);
@@ -72,14 +73,17 @@ std::vector<double> grid_kernel_values(const KernelSpec &unit, const int k[3], i
   const double dx = p > 1 ? 2.0 * kRadiusInner / (p - 1) : 0.0;
   std::vector<int> rep[3];     // class representative of each 1D coordinate
   std::vector<double> u[3];    // unit-cell coordinate (r / K)
+  std::vector<double> zeta[3];    // its part within the cells: (check - centre) - (equivalent - centre)
   for (int d = 0; d < 3; ++d) {
     rep[d].resize(nc[d]);
     u[d].resize(nc[d]);
+    zeta[d].resize(nc[d]);
     for (int a = 0; a < k[d]; ++a)
       for (int i = 0; i < m; ++i) {
         const int D = grid_class_representative(a, k[d]);
         rep[d][a * m + i] = D;
         u[d][a * m + i] = (2.0 * D + (i - (p - 1)) * dx) * cs[d] / K;
+        zeta[d][a * m + i] = (i - (p - 1)) * dx * cs[d] / K;
       }
   }
   // reciprocal sum Re sum_m W(k) e^{i k.u}, k_d = pi m_d / box_d
@@ -93,41 +97,62 @@ std::vector<double> grid_kernel_values(const KernelSpec &unit, const int k[3], i
       for (int q = 0; q < M[d]; ++q)
         E[d][(std::size_t) c * M[d] + q] = std::polar(1.0, kPi * (q - Km[d]) * u[d][c] / box[d]);
   }
-  std::vector<double> W((std::size_t) M[0] * M[1] * M[2]);
+  // reciprocal weights: W(k) for G_per; first moments (moment tables) c_a(k) =
+  // (4 pi / V) k_a exp(-k^2 / 4 alpha^2) (2 / k^4 + 1 / (2 alpha^2 k^2)), the coefficients of
+  // sin(k.u) in P_a(u) = sum_n (u + n L)_a G(u + n L)
+  const int nsets = moment ? 4 : 1;
+  std::vector<std::vector<double>> W(nsets, std::vector<double>((std::size_t) M[0] * M[1] * M[2], 0.0));
   for (int a = 0; a < M[0]; ++a)
     for (int b = 0; b < M[1]; ++b)
       for (int c = 0; c < M[2]; ++c) {
         const int mv[3] = {a - Km[0], b - Km[1], c - Km[2]};
-        W[((std::size_t) a * M[1] + b) * M[2] + c] = s.k_inside(mv) ? s.weight_k2(s.k2_of(mv)) : 0.0;
+        if (!s.k_inside(mv)) continue;
+        const std::size_t at = ((std::size_t) a * M[1] + b) * M[2] + c;
+        const double k2 = s.k2_of(mv);
+        W[0][at] = s.weight_k2(k2);
+        if (!moment || k2 == 0.0) continue;
+        const double al2 = s.alpha * s.alpha;
+        const double f = (4 * kPi / s.volume) * std::exp(-k2 / (4 * al2)) * (2 / (k2 * k2) + 1 / (2 * al2 * k2));
+        for (int d = 0; d < 3; ++d) W[1 + d][at] = f * kPi * mv[d] / s.shape[d];
       }
-  std::vector<std::complex<double>> A((std::size_t) M[0] * M[1] * nc[2]), B((std::size_t) M[0] * nc[1] * nc[2]);
+  // sum_m W(m) e^{i k.u} contracted over the z and y axes (separable): B[set][(a * nc1 + y) * nc2 + z]
+  std::vector<std::vector<std::complex<double>>> B(nsets);
+  for (int set = 0; set < nsets; ++set) {
+    std::vector<std::complex<double>> A((std::size_t) M[0] * M[1] * nc[2]);
+    B[set].resize((std::size_t) M[0] * nc[1] * nc[2]);
+    const std::vector<double> &Ws = W[set];
 #pragma omp parallel for schedule(static)
-  for (int ab = 0; ab < M[0] * M[1]; ++ab)
-    for (int z = 0; z < nc[2]; ++z) {
-      std::complex<double> acc = 0;
-      for (int c = 0; c < M[2]; ++c) acc += W[(std::size_t) ab * M[2] + c] * E[2][(std::size_t) z * M[2] + c];
-      A[(std::size_t) ab * nc[2] + z] = acc;
-    }
-#pragma omp parallel for schedule(static)
-  for (int a = 0; a < M[0]; ++a)
-    for (int y = 0; y < nc[1]; ++y)
+    for (int ab = 0; ab < M[0] * M[1]; ++ab)
       for (int z = 0; z < nc[2]; ++z) {
         std::complex<double> acc = 0;
-        for (int b = 0; b < M[1]; ++b)
-          acc += E[1][(std::size_t) y * M[1] + b] * A[((std::size_t) a * M[1] + b) * nc[2] + z];
-        B[((std::size_t) a * nc[1] + y) * nc[2] + z] = acc;
+        for (int c = 0; c < M[2]; ++c) acc += Ws[(std::size_t) ab * M[2] + c] * E[2][(std::size_t) z * M[2] + c];
+        A[(std::size_t) ab * nc[2] + z] = acc;
       }
-  std::vector<double> v((std::size_t) nc[0] * nc[1] * nc[2]);
+#pragma omp parallel for schedule(static)
+    for (int a = 0; a < M[0]; ++a)
+      for (int y = 0; y < nc[1]; ++y)
+        for (int z = 0; z < nc[2]; ++z) {
+          std::complex<double> acc = 0;
+          for (int b = 0; b < M[1]; ++b)
+            acc += E[1][(std::size_t) y * M[1] + b] * A[((std::size_t) a * M[1] + b) * nc[2] + z];
+          B[set][((std::size_t) a * nc[1] + y) * nc[2] + z] = acc;
+        }
+  }
+  const std::size_t nv = (std::size_t) nc[0] * nc[1] * nc[2];
+  std::vector<double> v(nv);
+  if (moment) moment->assign(3 * nv, 0.0);
   const double quad_unit = s.yukawa ? 0.0 : 2 * kPi / (3 * s.volume);
   const double cut = s.real_cut();
 #pragma omp parallel for schedule(dynamic, 1)
   for (int x = 0; x < nc[0]; ++x)
     for (int y = 0; y < nc[1]; ++y)
       for (int z = 0; z < nc[2]; ++z) {
-        std::complex<double> acc = 0;
-        for (int a = 0; a < M[0]; ++a)
-          acc += E[0][(std::size_t) x * M[0] + a] * B[((std::size_t) a * nc[1] + y) * nc[2] + z];
-        double val = acc.real() + s.background();
+        std::complex<double> acc[4] = {0, 0, 0, 0};
+        for (int set = 0; set < nsets; ++set)
+          for (int a = 0; a < M[0]; ++a)
+            acc[set] += E[0][(std::size_t) x * M[0] + a] * B[set][((std::size_t) a * nc[1] + y) * nc[2] + z];
+        double val = acc[0].real() + s.background();
+        double pm[3] = {acc[1].imag(), acc[2].imag(), acc[3].imag()};    // P_a
         const double r[3] = {u[0][x], u[1][y], u[2][z]};
         const int D[3] = {rep[0][x], rep[1][y], rep[2][z]};
         // images within the real-space cutoff per axis, and the excluded ones (n = 0 there:
@@ -150,6 +175,7 @@ std::vector<double> grid_kernel_values(const KernelSpec &unit, const int k[3], i
                 d2 += d * d;
               }
               const double rho = std::sqrt(d2);
+              const double dv[3] = {r[0] + s.period[0] * n0, r[1] + s.period[1] * n1, r[2] + s.period[2] * n2};
               if (s.direct) {    // direct image sum (Yukawa, kappa >= 10): the excluded terms are left out
                 if (excluded || rho > cut) continue;
                 double t, F;
@@ -165,9 +191,21 @@ std::vector<double> grid_kernel_values(const KernelSpec &unit, const int k[3], i
               double t, F;
               s.real(rho, excluded, t, F);
               val += t;
+              for (int d = 0; d < 3; ++d) pm[d] += dv[d] * t;
             }
+        const std::size_t at = ((std::size_t) x * nc[1] + y) * nc[2] + z;
+        if (moment) {
+          // offset-weighted kernel sum_n (D_n)_a G(r_n) = P_a(r) - zeta_a G_per(r) (D_n = r_n - zeta:
+          // the offset of the cells' centres), less its non-harmonic part N_a(zeta) =
+          // -(2 pi / 5 V) zeta_a |zeta|^2 (lap N_a = -(4 pi / V) zeta_a, from the background),
+          // added exactly at the targets; scale-free (degree 0)
+          const double zt[3] = {zeta[0][x], zeta[1][y], zeta[2][z]};
+          const double z2 = zt[0] * zt[0] + zt[1] * zt[1] + zt[2] * zt[2];
+          for (int d = 0; d < 3; ++d)
+            (*moment)[d * nv + at] = pm[d] - zt[d] * val + (2 * kPi / (5 * s.volume)) * zt[d] * z2;
+        }
         val -= quad_unit * (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-        v[((std::size_t) x * nc[1] + y) * nc[2] + z] = val / K;
+        v[at] = val / K;
       }
   return v;
 }
@@ -269,13 +307,11 @@ std::vector<double> slab_kernel_values(const int k[3], int p, const double cs[3]
   return v;
 }
 
-std::shared_ptr<GridKernel> compute_grid_kernel(const KernelSpec &unit, const int k[3], int p, const double cs[3],
-                                                bool slab)
+// The grid kernel of the values v (grid_kernel_values, slab_kernel_values layout): per class the
+// r2c spectrum of its M2L lattice, then the DFT over the cells.
+std::shared_ptr<GridKernel> grid_kernel_from_values(const int k[3], int p, const double cs[3], bool slab, double quad,
+                                                    const std::vector<double> &v)
 {
-  if (std::min(k[0], k[1]) < 3 || k[2] < (slab ? 1 : 3))
-    throw std::invalid_argument("kifmm: a periodic grid needs at least 3 cells per periodic side");
-  if (slab && unit.type != KernelType::Laplace)
-    throw std::invalid_argument("kifmm: the slab (periodic_dims 2) is for the Laplace kernel");
   auto g = std::make_shared<GridKernel>();
   g->k = k[0];
   g->slab = slab;
@@ -289,12 +325,12 @@ std::shared_ptr<GridKernel> compute_grid_kernel(const KernelSpec &unit, const in
   g->p = p;
   g->nraw = m2l_nfreq_raw(p);
   g->nfreq = m2l_nfreq(p);
-  g->quad = unit.type == KernelType::Yukawa || slab ? 0.0 : 2 * kPi / (3.0 * V);
+  g->quad = quad;
+  (void) V;
   const int n = m2l_grid_n(p), m = 2 * p - 1;
   const int nzc = slab ? 2 * k[2] - 1 : k[2];    // classes along z
   const int nc1 = k[1] * m, nc2 = nzc * m;
   const std::size_t kc = (std::size_t) k[0] * k[1] * nzc, ns = g->slots();
-  const std::vector<double> v = slab ? slab_kernel_values(k, p, cs) : grid_kernel_values(unit, k, p, cs);
   std::complex<double> *z = grid_alloc((std::size_t) g->nfreq * ns);
   std::fill(z, z + (std::size_t) g->nfreq * ns, std::complex<double>(0.0));
   {
@@ -349,6 +385,19 @@ std::shared_ptr<GridKernel> compute_grid_kernel(const KernelSpec &unit, const in
   return g;
 }
 
+std::shared_ptr<GridKernel> compute_grid_kernel(const KernelSpec &unit, const int k[3], int p, const double cs[3],
+                                                bool slab)
+{
+  if (std::min(k[0], k[1]) < 3 || k[2] < (slab ? 1 : 3))
+    throw std::invalid_argument("kifmm: a periodic grid needs at least 3 cells per periodic side");
+  if (slab && unit.type != KernelType::Laplace)
+    throw std::invalid_argument("kifmm: the slab (periodic_dims 2) is for the Laplace kernel");
+  double V = 1.0;
+  for (int d = 0; d < 3; ++d) V *= 2.0 * k[d] * cs[d];
+  const double quad = unit.type == KernelType::Yukawa || slab ? 0.0 : 2 * kPi / (3.0 * V);
+  return grid_kernel_from_values(k, p, cs, slab, quad, slab ? slab_kernel_values(k, p, cs) : grid_kernel_values(unit, k, p, cs));
+}
+
 }    // namespace
 
 std::shared_ptr<const GridKernel> periodic_grid_kernel(const KernelSpec &unit, const int cells[3], int p,
@@ -367,6 +416,32 @@ std::shared_ptr<const GridKernel> periodic_grid_kernel(const KernelSpec &unit, c
   if (it != cache.end()) return it->second;
   if (cache.size() > 16) cache.clear();    // boxes that keep changing size (yukawa) or shape
   auto g = compute_grid_kernel(unit, cells, p, cs, slab);
+  cache[key] = g;
+  return g;
+}
+
+std::shared_ptr<const GridMomentKernels> periodic_grid_moment_kernels(const int cells[3], int p, const double *cell_shape)
+{
+  (void) fftw_mutex();
+  static std::mutex mtx;
+  using Key = std::tuple<int, int, int, int, double, double, double>;
+  static std::map<Key, std::shared_ptr<const GridMomentKernels>> cache;
+  const double one[3] = {1.0, 1.0, 1.0};
+  const double *cs = cell_shape ? cell_shape : one;
+  const Key key{cells[0], cells[1], cells[2], p, cs[0], cs[1], cs[2]};
+  std::lock_guard<std::mutex> lock(mtx);
+  auto it = cache.find(key);
+  if (it != cache.end()) return it->second;
+  if (cache.size() > 8) cache.clear();
+  if (std::min(cells[0], std::min(cells[1], cells[2])) < 3)
+    throw std::invalid_argument("kifmm: a periodic grid needs at least 3 cells per periodic side");
+  std::vector<double> mom;
+  grid_kernel_values(KernelSpec{}, cells, p, cs, &mom);
+  auto g = std::make_shared<GridMomentKernels>();
+  const std::size_t nv = mom.size() / 3;
+  for (int a = 0; a < 3; ++a)
+    g->a[a] = grid_kernel_from_values(cells, p, cs, false, 0.0,
+                                      std::vector<double>(mom.begin() + a * nv, mom.begin() + (a + 1) * nv));
   cache[key] = g;
   return g;
 }

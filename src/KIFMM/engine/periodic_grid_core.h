@@ -227,7 +227,7 @@ void FmmEvaluator<K>::grid_passes(Communicator *comm, std::size_t own_sources, b
     grid_reduce(comm, up_equiv_.data(), up_equiv_.size());
     const double t3 = omp_get_wtime();
     stats_.t_upward = t3 - t2;
-    grid_m2l(g, occupied);
+    grid_m2l(g, occupied, *grid_kernel_, scale_[0]);
     const double t4 = omp_get_wtime();
     stats_.t_m2l = t4 - t3;
     grid_l2p(g, want_pot);
@@ -302,13 +302,14 @@ template <class K> void FmmEvaluator<K>::grid_p2m(const GridGeometry &g)
   }
 }
 
-// M2L: surface spectra of all cells -> convolution over the cells -> check potentials
-template <class K> void FmmEvaluator<K>::grid_m2l(const GridGeometry &g, const std::vector<double> &occupied)
+// M2L: surface spectra of all cells -> convolution over the cells with gk -> check potentials
+// (added to the downward check values, times s: the kernel's scale at the cell size)
+template <class K>
+void FmmEvaluator<K>::grid_m2l(const GridGeometry &g, const std::vector<double> &occupied, const GridKernel &gk,
+                              double s)
 {
   const std::vector<int> &tb = grid_trg_begin_;
-  const GridKernel &gk = *grid_kernel_;
   const int nf = gk.nfreq, kc = g.kc;
-  const double s = scale_[0];
   std::complex<double> *z = grid_spectra_.get((std::size_t) nf * gk.slots());
   if (gk.slots() != (std::size_t) kc)    // a slab's zero padding along z
     std::fill(z, z + (std::size_t) nf * gk.slots(), std::complex<double>(0.0));

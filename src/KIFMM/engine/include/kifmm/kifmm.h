@@ -108,6 +108,17 @@ class Evaluator {
   // set_root: a cube; set_root_box: a rectangular box of these half-widths per axis.
   virtual void set_root(const double center[3], double half_width) = 0;
   virtual void set_root_box(const double center[3], const double half_widths[3]) = 0;
+
+  // What the periodic virial needs besides the gradients (periodic_point_virial): Laplace,
+  // p p p, single-level grid (Options::periodic_grid > 0) only. Sources = targets = xyz
+  // (strengths q; collective over comm when not null, each rank its own points). Per point i:
+  //   offset[3i + a]    = (x_i - c_i)_a, c_i the centre of the grid cell of x_i (wrapped);
+  //   psi[9i + 3a + b]  = d/dx_b sum_{j, n} q_j (D_n)_a G(x_i - x_j - n L),
+  // D_n = c_i - c_j - n L the offset of the two cells' centres (image n of cell j): its far
+  // part by a convolution with offset-weighted grid kernels (periodic_grid_moment_kernels), its
+  // near part from the 26 neighbour cells. One evaluation with q, then that field.
+  virtual void periodic_virial_fields(Communicator *comm, std::size_t n, const double *xyz, const double *q,
+                                      double *offset, double *psi) = 0;
 };
 
 std::unique_ptr<Evaluator> make_evaluator(const KernelSpec &kernel, const Options &options);
@@ -316,6 +327,20 @@ double estimate_memory_bytes(const Options &options, std::size_t n_sources, std:
 void point_virial(Evaluator &ev, Communicator *comm, std::size_t n, const double *xyz,
                   const double *q, const double *grad, double prefactor, double *virial,
                   double center[3]);
+
+// Per-point virial of the periodic sum (Laplace, p p p, the single-level grid), in the form and
+// order of point_virial: virial[6i + ab] = 1/2 sum_{j, n} (x_i - x_j - n L)_a F_ijn,b over all
+// images n (the pair i, i at n = 0 excluded). With u_i = x_i - c_i (c_i the centre of i's grid
+// cell) the separation is u_i - u_j + D_n, so
+//   virial_i,ab = prefactor q_i / 2 [u_i,a grad_i,b - d_b phi_a(x_i) + psi_i,ab]
+// with phi_a the periodic potential of the strengths q_j u_j,a (three more gradient
+// evaluations) and psi the offset-weighted field of periodic_virial_fields (one evaluation and
+// three convolutions). The sum over i is the virial tensor -dU/d(strain); its trace is the
+// energy (Coulomb: degree -1). `grad`: the gradients of q at xyz; `offset` (3n, may be null)
+// returns u_i.
+void periodic_point_virial(Evaluator &ev, Communicator *comm, std::size_t n, const double *xyz,
+                           const double *q, const double *grad, double prefactor, double *virial,
+                           double *offset = nullptr);
 
 // Sampled error check. exact_gradient: the exact gradient at n_trg targets of the sources
 // (open: direct_sum; the evaluator's periodic cell: the Ewald sum of periodic.h); with comm,

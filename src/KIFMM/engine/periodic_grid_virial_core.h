@@ -1,0 +1,161 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
+// Periodic virial on the single-level grid: FmmEvaluator<K>::periodic_virial_fields (included
+// at the end of fmm_core.h; the formulas are in kifmm.h at periodic_point_virial and in
+// periodic_grid.h at periodic_grid_moment_kernels).
+//
+// For a target x in cell t and a source y in cell s (image n), x - y - n L = u - w + D_n with
+// u = x - c_t, w = y - c_s and D_n = c_t - c_s - n L. The offset-weighted field
+// psi_ab(x) = d_b sum_{s, n} D_n,a Phi_{s,n}(x) (Phi_{s,n}: the potential of image n of the
+// sources of cell s) has
+//   near part: the 26 neighbour cells (D = minus the neighbour's offset times the cell widths);
+//   far part : all other images through the offset-weighted kernels, applied to the cells'
+//              upward densities as the ordinary grid M2L (degree 0: no scale), then the
+//              check-to-equivalent and L2P gradient of the grid;
+//   background: the kernels leave out -(2 pi / 5 V) zeta_a |zeta|^2, zeta = u - w; it is added
+//              here from the moments sum q, sum q w, sum q w w^T of all sources.
+#pragma once
+
+#include "fmm_core.h"
+#include "periodic.h"
+#include "periodic_grid.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <type_traits>
+
+namespace kifmm {
+
+template <class K>
+void FmmEvaluator<K>::periodic_virial_fields(Communicator *comm, std::size_t n, const double *xyz, const double *q,
+                                             double *offset, double *psi)
+{
+  if (!std::is_same_v<K, LaplaceKernel> || !grid_ || opt_.periodic_dims != 3)
+    throw std::invalid_argument(
+        "kifmm: the periodic virial is computed for the Laplace kernel on the single-level grid "
+        "(Options::periodic_grid > 0) with three periodic dimensions");
+  const bool dist = comm && comm->size() > 1;
+  // offsets from the cells' centres (wrapped coordinates)
+  std::vector<double> wrapped;
+  wrap_into_cell(n, xyz, opt_.root_center, opt_.root_half_width, wrapped, opt_.root_shape);
+  const GridGeometry g = grid_geometry();
+  for (std::size_t i = 0; i < n; ++i) {
+    double c[3];
+    grid_center(g, grid_cell_of(&wrapped[3 * i]), c);
+    for (int d = 0; d < 3; ++d) offset[3 * i + d] = wrapped[3 * i + d] - c[d];
+  }
+  std::fill(psi, psi + 9 * n, 0.0);
+  std::vector<double> grad(3 * n);
+  if (dist) evaluate_distributed(*comm, n, xyz, q, nullptr, grad.data());
+  else if (n > 0) evaluate(n, xyz, q, n, xyz, nullptr, grad.data());
+  else return;
+  if (stats_.n_sources == 0) return;    // the same on every rank (a global count)
+  std::vector<double> ps(9 * tx_.size(), 0.0);
+  grid_offset_field(dist ? comm : nullptr, ps.data());
+  for (std::size_t i = 0; i < tx_.size(); ++i) std::copy(&ps[9 * i], &ps[9 * i + 9], psi + 9 * tree_.trg_order[i]);
+}
+
+template <class K> void FmmEvaluator<K>::grid_offset_field(Communicator *comm, double *psi)
+{
+  if constexpr (std::is_same_v<K, LaplaceKernel>) {
+    const GridGeometry g = grid_geometry();
+    const std::vector<int> &sb = grid_src_begin_, &tb = grid_trg_begin_, &own_end = grid_own_end_;
+    const std::size_t nt = tx_.size();
+    const int kc = g.kc;
+    // ---- far part: three convolutions of the upward densities (kept from the evaluation)
+    const auto mk = periodic_grid_moment_kernels(g.k, p_, g.cs);
+    std::vector<double> occupied(kc);
+    for (int b = 0; b < kc; ++b) occupied[b] = own_end[b] - sb[b];
+    grid_reduce(comm, occupied.data(), kc);
+    for (int a = 0; a < 3; ++a) {
+      dn_check_.assign((std::size_t) kc * nsurf_, 0.0);
+      std::fill(tgx_.begin(), tgx_.end(), 0.0);
+      std::fill(tgy_.begin(), tgy_.end(), 0.0);
+      std::fill(tgz_.begin(), tgz_.end(), 0.0);
+      grid_m2l(g, occupied, *mk->a[a], 1.0);
+      grid_l2p(g, false);
+      for (std::size_t i = 0; i < nt; ++i) {
+        psi[9 * i + 3 * a] += tgx_[i];
+        psi[9 * i + 3 * a + 1] += tgy_[i];
+        psi[9 * i + 3 * a + 2] += tgz_[i];
+      }
+    }
+    // ---- near part: the gradient of each neighbour cell's sources times the centres' offset
+    const double *L = g.L;
+#pragma omp parallel
+    {
+      std::vector<double> x, y, z, gx, gy, gz;
+#pragma omp for schedule(dynamic, 1)
+      for (int b = 0; b < kc; ++b) {
+        const std::size_t t = tb[b], m = tb[b + 1] - tb[b];
+        if (m == 0) continue;
+        x.resize(m);
+        y.resize(m);
+        z.resize(m);
+        for (int o = 0; o < 27; ++o) {
+          const int dx = o / 9 - 1, dy = (o / 3) % 3 - 1, dz = o % 3 - 1;
+          if (dx == 0 && dy == 0 && dz == 0) continue;    // D = 0
+          signed char sh[3];
+          const int s = grid_neighbour(b, dx, dy, dz, sh);
+          if (s < 0 || sb[s + 1] == sb[s]) continue;
+          for (std::size_t i = 0; i < m; ++i) {
+            x[i] = tx_[t + i] - sh[0] * L[0];
+            y[i] = ty_[t + i] - sh[1] * L[1];
+            z[i] = tz_[t + i] - sh[2] * L[2];
+          }
+          gx.assign(m, 0.0);
+          gy.assign(m, 0.0);
+          gz.assign(m, 0.0);
+          p2p_pg<K, false>(k_, false, {m, x.data(), y.data(), z.data()}, source_range(sb[s], sb[s + 1] - sb[s]),
+                           ResultSpan{nullptr, gx.data(), gy.data(), gz.data()});
+          const double D[3] = {-dx * g.w[0], -dy * g.w[1], -dz * g.w[2]};
+          for (std::size_t i = 0; i < m; ++i)
+            for (int a = 0; a < 3; ++a) {
+              double *pa = psi + 9 * (t + i) + 3 * a;
+              pa[0] += D[a] * gx[i];
+              pa[1] += D[a] * gy[i];
+              pa[2] += D[a] * gz[i];
+            }
+        }
+      }
+    }
+    // ---- background: d_b of sum_j q_j N_a(u - w_j), N_a(z) = -(2 pi / 5 V) z_a |z|^2
+    double mom[13] = {0};    // Q, M1[3], M2[9]
+    for (int b = 0; b < kc; ++b) {
+      double c[3];
+      grid_center(g, b, c);
+      for (int j = sb[b]; j < own_end[b]; ++j) {
+        const double w[3] = {sx_[j] - c[0], sy_[j] - c[1], sz_[j] - c[2]}, s = sq_[j];
+        mom[0] += s;
+        for (int a = 0; a < 3; ++a) {
+          mom[1 + a] += s * w[a];
+          for (int e = 0; e < 3; ++e) mom[4 + 3 * a + e] += s * w[a] * w[e];
+        }
+      }
+    }
+    grid_reduce(comm, mom, 13);
+    constexpr double pi = 3.14159265358979323846;
+    const double V = L[0] * L[1] * L[2], cN = -2.0 * pi / (5.0 * V);
+    const double Q = mom[0], *M1 = mom + 1, *M2 = mom + 4, trM2 = M2[0] + M2[4] + M2[8];
+#pragma omp parallel for schedule(static)
+    for (int b = 0; b < kc; ++b) {
+      double c[3];
+      grid_center(g, b, c);
+      for (int i = tb[b]; i < tb[b + 1]; ++i) {
+        const double u[3] = {tx_[i] - c[0], ty_[i] - c[1], tz_[i] - c[2]};
+        const double S = Q * (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) -
+            2 * (u[0] * M1[0] + u[1] * M1[1] + u[2] * M1[2]) + trM2;
+        for (int a = 0; a < 3; ++a)
+          for (int e = 0; e < 3; ++e) {
+            const double T = Q * u[a] * u[e] - u[a] * M1[e] - M1[a] * u[e] + M2[3 * a + e];
+            psi[9 * (std::size_t) i + 3 * a + e] += cN * ((a == e ? S : 0.0) + 2 * T);
+          }
+      }
+    }
+  } else {
+    (void) comm;
+    (void) psi;
+  }
+}
+
+}    // namespace kifmm

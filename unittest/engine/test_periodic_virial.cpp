@@ -1,0 +1,205 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
+// The virial tensor of periodic systems (kifmm::periodic_point_virial, single-level grid,
+// Laplace): per point against an Ewald sum of the pair virial written here (real-space and
+// reciprocal parts of sum_n (r_n)_a dG/dr_b(r_n), with the background constant), its trace
+// against the energy, its diagonal against numerical derivatives of the exact energy under
+// small anisotropic strains; cubic and rectangular boxes, neutral and charged.
+#include "periodic.h"
+
+#include "fmm_core.h"
+#include "test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <complex>
+#include <stdexcept>
+
+using namespace kifmm_test;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Ewald reference: v_i,ab = 1/2 q_i sum_j q_j K_ab(x_i - x_j) (prefactor 1), K_ab(r) the
+// strain derivative of the tin-foil G_per: real space sum_n (r_n)_a (r_n)_b g'(r_n)/r_n with
+// g = erfc(alpha r)/r (n = 0 left out for i = j), reciprocal (4 pi / V) sum_k exp(-k^2/4 alpha^2)
+// / k^2 cos(k.r) [-delta_ab + 2 k_a k_b (1/(4 alpha^2) + 1/k^2)], constant delta_ab pi/(V alpha^2).
+std::vector<double> ewald_point_virial(const Points &p, const double L[3])
+{
+  const std::size_t n = p.size();
+  const double Lmin = std::min(L[0], std::min(L[1], L[2])), V = L[0] * L[1] * L[2];
+  const double alpha = 4.0 / Lmin, rcut = 6.5 / alpha, kcut = 13.0 * alpha;
+  std::vector<double> T(9 * n, 0.0);
+  int nim[3], mk[3];
+  for (int d = 0; d < 3; ++d) {
+    nim[d] = (int) std::ceil(rcut / L[d]) + 1;
+    mk[d] = (int) std::ceil(kcut * L[d] / (2 * kPi));
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < n; ++j)
+      for (int a = -nim[0]; a <= nim[0]; ++a)
+        for (int b = -nim[1]; b <= nim[1]; ++b)
+          for (int c = -nim[2]; c <= nim[2]; ++c) {
+            if (i == j && a == 0 && b == 0 && c == 0) continue;
+            const int m[3] = {a, b, c};
+            double r[3], r2 = 0;
+            for (int d = 0; d < 3; ++d) {
+              r[d] = p.xyz[3 * i + d] - p.xyz[3 * j + d] + m[d] * L[d];
+              r2 += r[d] * r[d];
+            }
+            const double rho = std::sqrt(r2);
+            if (rho > rcut) continue;
+            const double F = (-std::erfc(alpha * rho) / rho - 2 * alpha / std::sqrt(kPi) * std::exp(-alpha * alpha * r2)) /
+                (rho * rho);    // g'(rho) / rho
+            for (int x = 0; x < 3; ++x)
+              for (int y = 0; y < 3; ++y) T[9 * i + 3 * x + y] += p.q[j] * r[x] * r[y] * F;
+          }
+  for (int a = -mk[0]; a <= mk[0]; ++a)
+    for (int b = -mk[1]; b <= mk[1]; ++b)
+      for (int c = -mk[2]; c <= mk[2]; ++c) {
+        if (a == 0 && b == 0 && c == 0) continue;
+        const double k[3] = {2 * kPi * a / L[0], 2 * kPi * b / L[1], 2 * kPi * c / L[2]};
+        const double k2 = k[0] * k[0] + k[1] * k[1] + k[2] * k[2];
+        if (k2 > kcut * kcut) continue;
+        const double f = 4 * kPi / V * std::exp(-k2 / (4 * alpha * alpha)) / k2, h = 2 * (1 / (4 * alpha * alpha) + 1 / k2);
+        std::complex<double> S = 0;
+        for (std::size_t j = 0; j < n; ++j)
+          S += p.q[j] * std::polar(1.0, k[0] * p.xyz[3 * j] + k[1] * p.xyz[3 * j + 1] + k[2] * p.xyz[3 * j + 2]);
+        for (std::size_t i = 0; i < n; ++i) {
+          const double cs =
+              (std::polar(1.0, k[0] * p.xyz[3 * i] + k[1] * p.xyz[3 * i + 1] + k[2] * p.xyz[3 * i + 2]) * std::conj(S)).real();
+          for (int x = 0; x < 3; ++x)
+            for (int y = 0; y < 3; ++y) T[9 * i + 3 * x + y] += f * cs * ((x == y ? -1.0 : 0.0) + h * k[x] * k[y]);
+        }
+      }
+  double Q = 0;
+  for (double s : p.q) Q += s;
+  std::vector<double> v(6 * n);
+  const int ab[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
+  for (std::size_t i = 0; i < n; ++i)
+    for (int m = 0; m < 6; ++m) {
+      const int a = ab[m][0], b = ab[m][1];
+      const double K = T[9 * i + 3 * a + b] + (a == b ? Q * kPi / (V * alpha * alpha) : 0.0);
+      v[6 * i + m] = 0.5 * p.q[i] * K;
+    }
+  return v;
+}
+
+struct Case {
+  double shape[3];
+  double shift;    // added to every charge (net charge)
+};
+
+Points case_points(std::size_t n, unsigned seed, const double c[3], double h, const double shape[3], double shift)
+{
+  Points p = uniform_cube(n, seed);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int d = 0; d < 3; ++d) p.xyz[3 * i + d] = c[d] + h * shape[d] * p.xyz[3 * i + d];
+    p.q[i] += shift;
+  }
+  return p;
+}
+
+kifmm::Options grid_options(int order, int grid, double h, const double c[3], const double shape[3])
+{
+  kifmm::Options o = periodic_options(order, 32, h, c, grid);
+  for (int d = 0; d < 3; ++d) o.root_shape[d] = shape[d];
+  return o;
+}
+
+std::vector<double> fmm_point_virial(const kifmm::Options &o, const Points &p)
+{
+  const std::size_t n = p.size();
+  auto ev = kifmm::make_evaluator(kifmm::KernelSpec{}, o);
+  std::vector<double> g(3 * n), v(6 * n);
+  ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), nullptr, g.data());
+  kifmm::periodic_point_virial(*ev, nullptr, n, p.xyz.data(), p.q.data(), g.data(), 1.0, v.data());
+  return v;
+}
+
+std::vector<double> total(const std::vector<double> &v)
+{
+  std::vector<double> t(6, 0.0);
+  for (std::size_t i = 0; i < v.size(); ++i) t[i % 6] += v[i];
+  return t;
+}
+
+}    // namespace
+
+TEST(PeriodicVirial, PerPointEqualsEwald)
+{
+  const double c[3] = {0.1, -0.2, 0.3}, h = 0.5;
+  for (const Case &cs : {Case{{1.0, 1.0, 1.0}, 0.0}, Case{{1.0, 0.8, 0.9}, 0.0}, Case{{1.0, 0.6, 0.6}, 0.15}}) {
+    const Points p = case_points(300, 7, c, h, cs.shape, cs.shift);
+    int grid = 0;
+    for (int k = 3; k <= 12 && !grid; ++k)
+      if (kifmm::grid_fits_cell(10, k, cs.shape)) grid = k;
+    ASSERT_GT(grid, 0) << cs.shape[1] << " " << cs.shape[2];
+    const std::vector<double> v = fmm_point_virial(grid_options(10, grid, h, c, cs.shape), p);
+    const double L[3] = {2 * h * cs.shape[0], 2 * h * cs.shape[1], 2 * h * cs.shape[2]};
+    const std::vector<double> ref = ewald_point_virial(p, L);
+    const double e = rel_l2(v, ref), et = rel_l2(total(v), total(ref));
+    EXPECT_LT(e, 1e-6) << cs.shape[1] << " " << cs.shape[2] << " shift " << cs.shift;
+    EXPECT_LT(et, 1e-6) << cs.shape[1] << " " << cs.shape[2] << " shift " << cs.shift;
+    // the off-diagonal part is not small: the test sees it
+    const std::vector<double> t = total(ref);
+    EXPECT_GT(std::fabs(t[3]) + std::fabs(t[4]) + std::fabs(t[5]), 1e-3 * (std::fabs(t[0]) + std::fabs(t[1]) + std::fabs(t[2])));
+  }
+}
+
+TEST(PeriodicVirial, TraceIsTheEnergyAndDiagonalIsTheStrainDerivative)
+{
+  // U = 1/2 sum q_i phi_i; W_aa = -dU/d(strain_aa) at fixed scaled coordinates, by central
+  // differences of the exact (Ewald) energy of the strained box
+  const double c[3] = {0, 0, 0}, h = 0.5, shape[3] = {1.0, 0.7, 0.85};
+  const Points p = case_points(200, 11, c, h, shape, 0.05);
+  const std::size_t n = p.size();
+  int grid = 0;
+  for (int k = 3; k <= 12 && !grid; ++k)
+    if (kifmm::grid_fits_cell(10, k, shape)) grid = k;
+  ASSERT_GT(grid, 0);
+  // prefactor -1: F = -q grad, the Coulomb force for U = +1/2 sum q phi
+  auto ev = kifmm::make_evaluator(kifmm::KernelSpec{}, grid_options(10, grid, h, c, shape));
+  std::vector<double> g(3 * n), pot(n), v(6 * n);
+  ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());
+  kifmm::periodic_point_virial(*ev, nullptr, n, p.xyz.data(), p.q.data(), g.data(), -1.0, v.data());
+  const std::vector<double> W = total(v);
+  double U = 0;
+  for (std::size_t i = 0; i < n; ++i) U += 0.5 * p.q[i] * pot[i];
+  EXPECT_NEAR(W[0] + W[1] + W[2], U, 1e-7 * std::fabs(U));
+  auto energy = [&](int axis, double eps) {
+    Points s = p;
+    double sh[3] = {shape[0], shape[1], shape[2]};
+    for (std::size_t i = 0; i < n; ++i) s.xyz[3 * i + axis] *= 1 + eps;
+    sh[axis] *= 1 + eps;
+    const double hs = std::max(sh[0], std::max(sh[1], sh[2]));
+    for (double &x : sh) x /= hs;
+    std::vector<double> ps(n);
+    kifmm::periodic_direct_sum(kifmm::KernelSpec{}, c, h * hs, n, s.xyz.data(), s.q.data(), n, s.xyz.data(), ps.data(),
+                               nullptr, sh);
+    double u = 0;
+    for (std::size_t i = 0; i < n; ++i) u += 0.5 * s.q[i] * ps[i];
+    return u;
+  };
+  const double eps = 1e-4;
+  for (int a = 0; a < 3; ++a) {
+    const double dU = (energy(a, eps) - energy(a, -eps)) / (2 * eps);
+    EXPECT_NEAR(W[a], -dU, 1e-6 * std::fabs(U)) << "axis " << a;
+  }
+  // anisotropic: the diagonal components differ
+  EXPECT_GT(std::fabs(W[0] - W[1]) + std::fabs(W[1] - W[2]), 1e-3 * std::fabs(U));
+}
+
+TEST(PeriodicVirial, NeedsTheGridAndLaplace)
+{
+  const double c[3] = {0, 0, 0}, one[3] = {1, 1, 1};
+  const Points p = case_points(50, 3, c, 1.0, one, 0.0);
+  std::vector<double> g(150), v(300);
+  auto octree = kifmm::make_evaluator(kifmm::KernelSpec{}, periodic_options(6, 16, 1.0, c));
+  EXPECT_THROW(kifmm::periodic_point_virial(*octree, nullptr, 50, p.xyz.data(), p.q.data(), g.data(), 1.0, v.data()),
+               std::invalid_argument);
+  auto yukawa = kifmm::make_evaluator(kifmm::KernelSpec{kifmm::KernelType::Yukawa, 2.0}, periodic_options(6, 16, 1.0, c, 4));
+  EXPECT_THROW(kifmm::periodic_point_virial(*yukawa, nullptr, 50, p.xyz.data(), p.q.data(), g.data(), 1.0, v.data()),
+               std::invalid_argument);
+}

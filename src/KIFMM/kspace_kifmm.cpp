@@ -539,13 +539,16 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   // reduction over ranks), as in the KSPACE styles
   if (eflag_global || keep) MPI_Allreduce(&e_local, &energy, 1, MPI_DOUBLE, MPI_SUM, world);
   if (vflag_global || keep) MPI_Allreduce(v_local, virial, 6, MPI_DOUBLE, MPI_SUM, world);
-  if (periodic && (vflag_global || keep)) periodic_virial(e_local);
+  const bool tensor = periodic_tensor();
+  if (periodic && !tensor && (vflag_global || keep)) periodic_virial(e_local);
+  if (vflag_atom && periodic && !tensor)
+    error->all(FLERR, "kspace_style kifmm: per-atom virial (compute stress/atom) with periodic boundaries "
+               "needs boundary p p p, kernel coulomb or gravity and 'kspace_modify pressure/scalar no' "
+               "(the default there)");
+  if (tensor && (vflag_global || keep || vflag_atom)) periodic_tensor_virial(cf, vflag_global || keep, vflag_atom);
   if (action == Stride::Evaluate) schedule->end_evaluation(energy, virial);
 
-  if (vflag_atom && periodic)
-    error->all(FLERR, "kspace_style kifmm: per-atom virial (compute stress/atom) is not available "
-               "with periodic boundaries");
-  if (vflag_atom && nsrc > 0) {
+  if (vflag_atom && !periodic && nsrc > 0) {
     double center[3] = {0, 0, 0};
     per_atom_virial(cf, center);
   }
@@ -563,23 +566,30 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
 void KSpaceKIFMM::per_atom_virial(double cf, double center[3])
 {
   const std::size_t n = index.size();
-  std::vector<double> w(6 * n);
+  std::vector<double> w(6 * n), u(3 * n);
   kifmm::point_virial(*engine, distributed() ? kcomm.get() : nullptr, n, xyz.data(),
                       strength.data(), grad.data(), cf, w.data(), center);
+  for (std::size_t k = 0; k < n; ++k)
+    for (int a = 0; a < 3; ++a) u[3 * k + a] = xyz[3 * k + a] - center[a];
+  add_body_pair_virial(cf, u.data(), w.data());
+  for (std::size_t k = 0; k < n; ++k)
+    for (int c = 0; c < 6; ++c) vatom[index[k]][c] += w[6 * k + c];
+}
+
+// The pairs inside rigid bodies are not in the sum: grad has lost their gradient o (the
+// engine's virial formula used offset_a times grad: add offset_a o_b back) and their pair virial
+// 1/2 cf s T_ab goes. offset: per point, the origin the engine's formula measured x from.
+void KSpaceKIFMM::add_body_pair_virial(double cf, const double *offset, double *w) const
+{
+  if (point_body.empty()) return;
   const int row[3][3] = {{4, 7, 8}, {7, 5, 9}, {8, 9, 6}};    // pair virial T_ab in body_pairs
   const int slot[3][3] = {{0, 3, 4}, {3, 1, 5}, {4, 5, 2}};   // LAMMPS order xx yy zz xy xz yz
-  for (std::size_t k = 0; k < n; ++k) {
-    double *v = vatom[index[k]];
-    for (int c = 0; c < 6; ++c) v[c] += w[6 * k + c];
-    if (point_body.empty() || !point_body[k]) continue;
-    // pairs inside the body left out: grad has lost their gradient (add x_a times it back),
-    // and their pair virial 1/2 cf s T_ab goes
+  for (std::size_t k = 0; k < index.size(); ++k) {
+    if (!point_body[k]) continue;
     const double *o = &body_pairs[(std::size_t) KIFMMRigidBodies::nvalues * k];
     const double s = strength[k];
-    for (int a = 0; a < 3; ++a) {
-      const double xa = xyz[3 * k + a] - center[a];
-      for (int b = a; b < 3; ++b) v[slot[a][b]] += 0.5 * cf * s * (xa * o[b] - o[row[a][b]]);
-    }
+    for (int a = 0; a < 3; ++a)
+      for (int b = a; b < 3; ++b) w[6 * k + slot[a][b]] += 0.5 * cf * s * (offset[3 * k + a] * o[b] - o[row[a][b]]);
   }
 }
 

@@ -70,6 +70,7 @@ class KSpaceKIFMM : public KSpace {
   // engine evaluation of the gathered points (then the pairs inside rigid bodies subtracted)
   void evaluate_points(bool want_potential, double &comm_time, std::size_t &nsrc);
   void per_atom_virial(double prefactor, double center[3]);
+  void add_body_pair_virial(double prefactor, const double *offset, double *w) const;
 
   // measured error (kspace_kifmm_error.cpp): sampled against the exact sum, on free atoms'
   // forces and on rigid clumps' net forces and torques (negative: nothing of that kind)
@@ -118,6 +119,12 @@ class KSpaceKIFMM : public KSpace {
   void fit_periodic_box(kifmm::Options &o);
   std::string grid_cells_text(const kifmm::Options &o) const;
   void periodic_virial(double e_local);
+  // the full virial tensor of p p p (coulomb, gravity) on the single-level grid: the engine's
+  // own, or a grid evaluator next to the octree (virial_engine)
+  bool periodic_tensor() const;
+  std::unique_ptr<kifmm::Evaluator> virial_engine;
+  kifmm::Evaluator &virial_evaluator();
+  void periodic_tensor_virial(double prefactor, bool global, bool peratom);
 
   // the fix scheduling the evaluations (fix kifmm/stride), found among the fixes at init
   class KIFMMForceSchedule *schedule = nullptr;

@@ -9,6 +9,7 @@
 #include "domain.h"
 #include "error.h"
 #include "update.h"
+#include "utils.h"
 
 #include <algorithm>
 #include <cmath>
@@ -67,15 +68,19 @@ void KSpaceKIFMM::periodic_init()
                "density is not zero); use 'kspace_modify kifmm jeans yes' to subtract it "
                "(uniform negative background, Jeans swindle)");
   periodic_cell();
-  // only the trace of the periodic virial is computed (periodic_virial): LAMMPS's flag for
-  // scalar-only kspace pressures makes compute pressure refuse tensor components (thermo pxx,
-  // fix npt/nph aniso or tri, fix box/relax aniso, ...) instead of using wrong ones
-  if (scalar_pressure_user == 0)
+  // p p p with coulomb or gravity: the full virial tensor (periodic_tensor_virial), unless
+  // 'kspace_modify pressure/scalar yes' asks for the trace only (exact and free: the energy).
+  // Slabs and yukawa: only the trace (periodic_virial); LAMMPS's flag for scalar-only kspace
+  // pressures makes compute pressure refuse tensor components (thermo pxx, fix npt/nph aniso or
+  // tri, fix box/relax aniso, ...) instead of using wrong ones
+  const bool tensor_possible = !slab && kset.kernel != LongRangeKernel::Yukawa;
+  if (scalar_pressure_user == 0 && !tensor_possible)
     error->all(FLERR,
-               "kspace_style kifmm: 'kspace_modify pressure/scalar no' is not available with "
-               "periodic boundaries: only the trace of the periodic virial (the scalar pressure) "
-               "is computed, not its tensor components");
-  scalar_pressure_flag = scalar_pressure_written = 1;
+               "kspace_style kifmm: 'kspace_modify pressure/scalar no' is not available with {}: only "
+               "the trace of the periodic virial (the scalar pressure) is computed there, not its "
+               "tensor components",
+               slab ? "a slab (boundary p p f)" : "kernel yukawa");
+  scalar_pressure_flag = scalar_pressure_written = (tensor_possible && scalar_pressure_user != 1) ? 0 : 1;
   // net charge of a slab: no background, the doubly periodic sum of the charges as they are
   if (slab && std::fabs(qsum) > 1.0e-5 && comm->me == 0)
     error->warning(FLERR,
@@ -257,4 +262,74 @@ void KSpaceKIFMM::periodic_virial(double e_local)
   double u = 0.0;
   MPI_Allreduce(&e_local, &u, 1, MPI_DOUBLE, MPI_SUM, world);
   virial[0] = virial[1] = virial[2] = u / 3.0;
+}
+
+// The full tensor is computed for p p p with coulomb or gravity unless pressure/scalar yes.
+bool KSpaceKIFMM::periodic_tensor() const
+{
+  return periodic && !slab && kset.kernel != LongRangeKernel::Yukawa && scalar_pressure_flag == 0;
+}
+
+// The evaluator of the virial tensor: the engine when it is the single-level grid; next to the
+// octree, a grid of the same order whose cells are about as many as the octree's leaves
+// (fitting the box; made again when the box changes shape so that it no longer fits).
+kifmm::Evaluator &KSpaceKIFMM::virial_evaluator()
+{
+  const kifmm::Options &o = engine->options();
+  if (o.periodic_grid > 0) {
+    virial_engine.reset();
+    return *engine;
+  }
+  double c[3], hw[3];
+  periodic_box(c, hw);
+  if (virial_engine && virial_engine->options().order == o.order) {
+    virial_engine->set_root_box(c, hw);
+    if (periodic_fits(virial_engine->options())) return *virial_engine;
+  }
+  const double want = std::cbrt(std::max(27.0, (double) tree_request.n / std::max(1, o.leaf_size)));
+  int best = 0;
+  double dist = 1e300;
+  for (int k = 3; k <= kifmm::max_grid_cells_long(o.order, o.root_shape); ++k)
+    if (kifmm::grid_fits_cell(o.order, k, o.root_shape) && std::fabs(std::log(k / want)) < dist) {
+      dist = std::fabs(std::log(k / want));
+      best = k;
+    }
+  if (best == 0)
+    error->all(FLERR,
+               "kspace_style kifmm: the virial tensor of the periodic box of lengths {:.10g} {:.10g} "
+               "{:.10g} needs a single-level grid of nearly cubic cells and none fits at order {}; "
+               "'kspace_modify pressure/scalar yes' gives the scalar pressure only",
+               domain->xprd, domain->yprd, domain->zprd, o.order);
+  kifmm::Options v = o;
+  v.periodic_grid = best;
+  virial_engine = kifmm::make_evaluator(engine->kernel(), v);
+  virial_engine->set_root_box(c, hw);
+  if (comm->me == 0)
+    utils::logmesg(lmp,
+                   "  KIFMM: the virial tensor (pressure components, per-atom virial) is computed on a "
+                   "single-level grid of {} cells (order {}) on the steps that need it\n",
+                   grid_cells_text(virial_engine->options()), o.order);
+  return *virial_engine;
+}
+
+// Virial tensor of the periodic system, global (virial[6]) and/or per atom (vatom):
+// kifmm::periodic_point_virial, 1/2 sum over all pairs and images of (x_i - x_j - nL)_a F_ij,b,
+// without the pairs inside rigid bodies. The trace equals the energy (Coulomb and gravity are
+// homogeneous of degree -1).
+void KSpaceKIFMM::periodic_tensor_virial(double cf, bool global, bool peratom)
+{
+  const std::size_t n = index.size();
+  std::vector<double> w(6 * n), u(3 * n);
+  kifmm::periodic_point_virial(virial_evaluator(), distributed() ? kcomm.get() : nullptr, n, xyz.data(),
+                               strength.data(), grad.data(), cf, w.data(), u.data());
+  add_body_pair_virial(cf, u.data(), w.data());
+  if (global) {
+    double v_local[6] = {0, 0, 0, 0, 0, 0};
+    for (std::size_t k = 0; k < n; ++k)
+      for (int c = 0; c < 6; ++c) v_local[c] += w[6 * k + c];
+    MPI_Allreduce(v_local, virial, 6, MPI_DOUBLE, MPI_SUM, world);
+  }
+  if (peratom)
+    for (std::size_t k = 0; k < n; ++k)
+      for (int c = 0; c < 6; ++c) vatom[index[k]][c] += w[6 * k + c];
 }

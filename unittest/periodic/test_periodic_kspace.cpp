@@ -30,6 +30,7 @@ struct Result {
   std::map<int, Vec3> f;
   double energy = 0;
   double wdiag[3] = {0, 0, 0};    // ewald_reference: diagonal of the virial (k-space + real space)
+  double w[6] = {0, 0, 0, 0, 0, 0};    // ewald_reference: the virial tensor (xx yy zz xy xz yz)
 };
 
 double rel(double a, double b)
@@ -94,6 +95,7 @@ class Periodic : public LammpsFixture {
     command("run 0 post no");
     Result r{forces_by_id(), thermo("elong")};
     for (int k = 0; k < 3; ++k) r.wdiag[k] = lmp->force->kspace->virial[k];
+    for (int k = 0; k < 6; ++k) r.w[k] = lmp->force->kspace->virial[k];
     EXPECT_DOUBLE_EQ(lmp->force->kspace->g_ewald, alpha);
     // real space: sum over pairs and images within rc (rc < L: minimum image shell n in {-1,0,1}^3)
     auto x = positions_by_id();
@@ -118,6 +120,8 @@ class Periodic : public LammpsFixture {
               const double fr = qq * (std::erfc(alpha * rr) / r2 + c2 * std::exp(-alpha * alpha * r2) / rr) / rr;
               for (int k = 0; k < 3; ++k) f[i][k] += fr * d[k];
               for (int k = 0; k < 3; ++k) r.wdiag[k] += 0.5 * fr * d[k] * d[k];
+              const int ab[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
+              for (int k = 0; k < 6; ++k) r.w[k] += 0.5 * fr * d[ab[k][0]] * d[ab[k][1]];
             }
     for (auto &[id, v] : r.f)
       for (int k = 0; k < 3; ++k) v[k] += f[id - 1][k];
@@ -676,29 +680,108 @@ TEST_F(Periodic, GridValueIsChecked)
   EXPECT_LAMMPS_ERROR(command("kspace_modify kifmm grid yes"), "grid 'yes' must be auto, no or an integer");
 }
 
-// Only the trace of the periodic virial is computed: the scalar pressure is exact (tested with
-// ewald above), tensor components stop in compute pressure instead of being wrong.
-TEST_F(Periodic, PressureTensorComponentsAreAnError)
+// The virial tensor (pxx .. pyz, fix npt aniso, compute stress/atom) of p p p: equal to ewald's
+// (k-space part + the real-space pair virial) in a cube (octree for the forces, a grid for the
+// virial), a rectangular box (grid) and the anisotropic capacitor layers; per-atom virials sum
+// to it; the trace is the energy.
+TEST_F(Periodic, PressureTensorEqualsEwald)
 {
-  load(uniform_cube(50, 56));
-  commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4\nthermo_style custom step press pxx");
-  EXPECT_LAMMPS_ERROR(command("run 0"), "pressure/scalar no' for tensor components");
+  struct Box {
+    double y, z;
+    bool layers;
+    std::string modify;
+  };
+  const Box boxes[] = {{1.0, 1.0, false, "order 12 leaf 40"}, {1.3, 0.9, false, "order 12"}, {1.0, 1.0, true, "order 12 leaf 40"}};
+  for (const Box &b : boxes) {
+    create();
+    Configuration c = uniform_cube(500, 71);
+    if (b.layers)
+      for (size_t i = 0; i < c.x.size(); ++i) c.x[i][2] = (c.q[i] > 0 ? 0.2 : 0.6) + 0.1 * c.x[i][2];
+    load(c);
+    command(fmt_cmd("change_box all y final 0 {} z final 0 {} remap units box", b.y, b.z));
+    Result ref = ewald_reference();
+    commands("kspace_style none\npair_style zero 0.01\npair_coeff * *\nkspace_style kifmm 1e-12\n"
+             "kspace_modify kifmm " + b.modify + "\ncompute s all stress/atom NULL\n"
+             "compute ss all reduce sum c_s[1] c_s[2] c_s[3] c_s[4] c_s[5] c_s[6]\n"
+             "thermo_style custom step elong pxx pyy pzz pxy pxz pyz c_ss[1] c_ss[2] c_ss[3] c_ss[4] c_ss[5] c_ss[6]\n"
+             "thermo_modify norm no");
+    command("run 0 post no");
+    const double *w = lmp->force->kspace->virial;
+    double scale = 0, err = 0, err_atom = 0;
+    for (int k = 0; k < 6; ++k) {
+      scale += ref.w[k] * ref.w[k];
+      err += (w[k] - ref.w[k]) * (w[k] - ref.w[k]);
+      // compute stress/atom: minus the per-atom virial (lj units: no conversion)
+      const double sa = -evaluate(fmt_cmd("c_ss[{}]", (double) (k + 1)));
+      err_atom += (sa - w[k]) * (sa - w[k]);
+    }
+    err = std::sqrt(err / scale);
+    err_atom = std::sqrt(err_atom / scale);
+    const double offdiag = std::sqrt((ref.w[3] * ref.w[3] + ref.w[4] * ref.w[4] + ref.w[5] * ref.w[5]) / scale);
+    if (rank() == 0)
+      std::printf("  virial tensor, box 1 x %g x %g%s: %.2e (per-atom sum %.2e; off-diagonal part %.2f)\n", b.y, b.z,
+                  b.layers ? " layers" : "", err, err_atom, offdiag);
+    EXPECT_LE(err, 1e-8) << b.y;
+    EXPECT_LE(err_atom, 1e-10) << b.y;
+    EXPECT_NEAR(w[0] + w[1] + w[2], thermo("elong"), 1e-8 * std::sqrt(scale)) << "trace = energy";
+    // pressure components from the virial (V = box volume, no kinetic part at T = 0)
+    const double V = lmp->domain->xprd * lmp->domain->yprd * lmp->domain->zprd;
+    EXPECT_NEAR(thermo("pxy"), w[3] / V, 1e-9 * std::sqrt(scale) / V);
+  }
 }
 
-TEST_F(Periodic, FixNptAnisoIsAnErrorAndIsoRuns)
+// Shear: pxy against the numerical derivative of the energy under a small tilt (ewald of the
+// triclinic box, complete with coul/long): W_xy = -dU/d(gamma), x -> x + gamma y.
+TEST_F(Periodic, PressureTensorIsTheStrainDerivativeUnderShear)
 {
-  load(uniform_cube(50, 57));
+  load(uniform_cube(400, 72));
+  commands("kspace_style kifmm 1e-10\npair_style zero 0.01\npair_coeff * *\nkspace_modify kifmm order 12 leaf 40\n"
+           "thermo_style custom step elong pxx pyy pzz pxy pxz pyz\nthermo_modify norm no\nrun 0 post no");
+  double w[6];
+  for (int k = 0; k < 6; ++k) w[k] = lmp->force->kspace->virial[k];
+  const double gamma = 2e-4;
+  auto energy_at = [&](double g) {
+    create();
+    load(uniform_cube(400, 72));
+    commands(fmt_cmd("change_box all triclinic\nchange_box all xy final {} remap units box\n"
+                     "pair_style coul/long 0.7\npair_coeff * *\npair_modify table 0\nkspace_style ewald 1e-14\n"
+                     "kspace_modify gewald 9 kmax/ewald 20 20 20\nthermo_style custom step pe\nthermo_modify norm no\nrun 0 post no",
+                     g * lmp->domain->yprd));
+    return thermo("pe");
+  };
+  const double dU = (energy_at(gamma) - energy_at(-gamma)) / (2 * gamma);
+  // (the same difference for x -> x + gamma z and y -> y + gamma z would test pxz, pyz)
+  if (rank() == 0) std::printf("  shear: W_xy %.10g, -dU/dgamma %.10g (W_xx %.6g)\n", w[3], -dU, w[0]);
+  EXPECT_NEAR(w[3], -dU, 1e-5 * std::fabs(w[0] + w[1] + w[2]));
+  EXPECT_GT(std::fabs(w[3]), 1e-3 * std::fabs(w[0] + w[1] + w[2])) << "the shear component is not negligible";
+}
+
+TEST_F(Periodic, FixNptAnisoRuns)
+{
+  load(uniform_cube(60, 57));
   commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4\nvelocity all create 1.0 5\n"
-           "fix 1 all npt temp 1 1 0.1 iso 1 1 1\nrun 2 post no\nunfix 1\n"
-           "fix 1 all npt temp 1 1 0.1 aniso 1 1 1");
+           "fix 1 all npt temp 1 1 0.1 aniso 1 1 1\nthermo_style custom step press pxx pyy pzz lx ly lz\nrun 5 post no");
+  EXPECT_NE(lmp->domain->xprd, lmp->domain->yprd) << "the box deforms anisotropically";
+}
+
+TEST_F(Periodic, PressureScalarYesKeepsTheTrace)
+{
+  // the trace only: the scalar pressure from the energy, tensor components refused by LAMMPS
+  load(uniform_cube(50, 58));
+  commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4\nkspace_modify pressure/scalar yes\n"
+           "thermo_style custom step press elong\nthermo_modify norm no\nrun 0 post no");
+  const double *w = lmp->force->kspace->virial;
+  EXPECT_NEAR(w[0], thermo("elong") / 3, 1e-12 * std::fabs(thermo("elong")));
+  EXPECT_EQ(w[3], 0.0);
+  command("thermo_style custom step press pxx");
   EXPECT_LAMMPS_ERROR(command("run 0"), "pressure/scalar no' for tensor components");
 }
 
-TEST_F(Periodic, PressureScalarNoIsAnError)
+TEST_F(Periodic, PressureTensorOfSlabsIsAnError)
 {
-  load(uniform_cube(50, 58));
+  load(uniform_cube(50, 60), "p p f");
   commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4\nkspace_modify pressure/scalar no");
-  EXPECT_LAMMPS_ERROR(command("run 0"), "kspace_modify pressure/scalar no' is not available with periodic");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "is not available with a slab");
 }
 
 TEST_F(Periodic, OpenBoundariesKeepTheTensor)
@@ -711,11 +794,11 @@ TEST_F(Periodic, OpenBoundariesKeepTheTensor)
   EXPECT_EQ(lmp->force->kspace->scalar_pressure_flag, 0);
 }
 
-TEST_F(Periodic, PerAtomVirialIsAnError)
+TEST_F(Periodic, PerAtomVirialOfTheScreenedKernelIsAnError)
 {
   load(uniform_cube(50, 55));
-  commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4\ncompute s all stress/atom NULL\n"
-           "compute ss all reduce sum c_s[1]\nthermo_style custom step c_ss");
+  commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4\nkspace_modify kifmm kernel yukawa 2.0\n"
+           "compute s all stress/atom NULL\ncompute ss all reduce sum c_s[1]\nthermo_style custom step c_ss");
   EXPECT_LAMMPS_ERROR(command("run 0"), "per-atom virial");
 }
 

@@ -76,6 +76,9 @@ def run(lmp, work, case, n, solver, acc, steps, cut_spacings=3, f_rms=1.0):
     env = dict(os.environ, OMP_NUM_THREADS="1")
     p = subprocess.run([lmp, "-in", "in.lmp", "-log", "log.lammps", "-screen", "none", "-nocite"], cwd=work, env=env)
     if p.returncode != 0:
+        log = os.path.join(work, "log.lammps")
+        err = [l for l in open(log).read().splitlines() if "ERROR" in l] if os.path.exists(log) else []
+        sys.stderr.write(f"{case} N={n} {solver} {acc}: failed: {err[-1] if err else 'no ERROR line'}\n")
         return None, None
     text = open(os.path.join(work, "log.lammps")).read()
     loops = re.findall(r"Loop time of ([0-9.eE+-]+) on \d+ procs for (\d+) steps", text)

@@ -57,7 +57,7 @@ def spacing(n, case):
 def run(lmp, work, case, n, solver, acc, steps, cut_spacings=3, f_rms=1.0):
     lx, ly, lz, boundary, _ = CASES[case]
     lines = ["units lj", "atom_style charge", f"boundary {boundary}", "atom_modify map array",
-             "read_data data.lmp", "neighbor 0.3 bin", "neigh_modify delay 0 every 1000 check no one 10000"]
+             "read_data data.lmp", f"neighbor {0.5 * spacing(n, case):.6g} bin", "neigh_modify delay 0 every 1000 check no one 10000"]
     if solver == "kifmm":
         lines += ["pair_style zero 0.01", "pair_coeff * *", f"kspace_style kifmm {acc}"]
     else:

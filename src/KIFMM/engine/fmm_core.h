@@ -271,6 +271,19 @@ template <class K> class FmmEvaluator : public Evaluator {
   void grid_l2p(const GridGeometry &g, bool want_pot);
   std::size_t grid_near_mutual(const GridGeometry &g, bool want_pot);
   std::size_t grid_near_one_sided(const GridGeometry &g, bool want_pot);
+  // the m targets from t moved by -shift L (they see the image of a neighbour cell at +shift L)
+  void grid_shifted_targets(const GridGeometry &g, std::size_t t, std::size_t m, const signed char sh[3],
+                            std::vector<double> &x, std::vector<double> &y, std::vector<double> &z) const
+  {
+    x.resize(m);
+    y.resize(m);
+    z.resize(m);
+    for (std::size_t i = 0; i < m; ++i) {
+      x[i] = tx_[t + i] - sh[0] * g.L[0];
+      y[i] = ty_[t + i] - sh[1] * g.L[1];
+      z[i] = tz_[t + i] - sh[2] * g.L[2];
+    }
+  }
   void grid_wrap_correction(const GridGeometry &g, Communicator *comm, double quad, bool want_pot);
   // M2L layout of level l: source cells (children of a target parent's colleague) and target
   // cells (V non-empty) in slots of xhat_/yhat_ (sized here), and per parent of level l-1 the

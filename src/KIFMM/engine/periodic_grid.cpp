@@ -175,7 +175,6 @@ std::vector<double> grid_kernel_values(const KernelSpec &unit, const int k[3], i
                 d2 += d * d;
               }
               const double rho = std::sqrt(d2);
-              const double dv[3] = {r[0] + s.period[0] * n0, r[1] + s.period[1] * n1, r[2] + s.period[2] * n2};
               if (s.direct) {    // direct image sum (Yukawa, kappa >= 10): the excluded terms are left out
                 if (excluded || rho > cut) continue;
                 double t, F;
@@ -191,7 +190,8 @@ std::vector<double> grid_kernel_values(const KernelSpec &unit, const int k[3], i
               double t, F;
               s.real(rho, excluded, t, F);
               val += t;
-              for (int d = 0; d < 3; ++d) pm[d] += dv[d] * t;
+              if (moment)
+                for (int d = 0; d < 3; ++d) pm[d] += (r[d] + s.period[d] * n[d]) * t;
             }
         const std::size_t at = ((std::size_t) x * nc[1] + y) * nc[2] + z;
         if (moment) {

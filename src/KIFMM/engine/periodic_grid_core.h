@@ -407,7 +407,6 @@ template <class K> std::size_t FmmEvaluator<K>::grid_near_mutual(const GridGeome
 template <class K> std::size_t FmmEvaluator<K>::grid_near_one_sided(const GridGeometry &g, bool want_pot)
 {
   const std::vector<int> &sb = grid_src_begin_, &tb = grid_trg_begin_;
-  const double *L = g.L;
   std::vector<std::size_t> zc(g.kc, 0);
 #pragma omp parallel
   {
@@ -416,18 +415,11 @@ template <class K> std::size_t FmmEvaluator<K>::grid_near_one_sided(const GridGe
     for (int b = 0; b < g.kc; ++b) {
       const std::size_t t = tb[b], n = tb[b + 1] - tb[b];
       if (n == 0) continue;
-      x.resize(n);
-      y.resize(n);
-      zz.resize(n);
       for (int o = 0; o < 27; ++o) {
         signed char sh[3];
         const int a = grid_neighbour(b, o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, sh);
         if (a < 0) continue;
-        for (std::size_t i = 0; i < n; ++i) {
-          x[i] = tx_[t + i] - sh[0] * L[0];
-          y[i] = ty_[t + i] - sh[1] * L[1];
-          zz[i] = tz_[t + i] - sh[2] * L[2];
-        }
+        grid_shifted_targets(g, t, n, sh, x, y, zz);
         p2p_pg<K, true>(k_, want_pot, {n, x.data(), y.data(), zz.data()}, source_range(sb[a], sb[a + 1] - sb[a]),
                         result_at(t), &zc[b]);
       }

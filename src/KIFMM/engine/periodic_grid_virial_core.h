@@ -81,7 +81,6 @@ template <class K> void FmmEvaluator<K>::grid_offset_field(Communicator *comm, d
       }
     }
     // ---- near part: the gradient of each neighbour cell's sources times the centres' offset
-    const double *L = g.L;
 #pragma omp parallel
     {
       std::vector<double> x, y, z, gx, gy, gz;
@@ -89,20 +88,13 @@ template <class K> void FmmEvaluator<K>::grid_offset_field(Communicator *comm, d
       for (int b = 0; b < kc; ++b) {
         const std::size_t t = tb[b], m = tb[b + 1] - tb[b];
         if (m == 0) continue;
-        x.resize(m);
-        y.resize(m);
-        z.resize(m);
         for (int o = 0; o < 27; ++o) {
           const int dx = o / 9 - 1, dy = (o / 3) % 3 - 1, dz = o % 3 - 1;
           if (dx == 0 && dy == 0 && dz == 0) continue;    // D = 0
           signed char sh[3];
           const int s = grid_neighbour(b, dx, dy, dz, sh);
           if (s < 0 || sb[s + 1] == sb[s]) continue;
-          for (std::size_t i = 0; i < m; ++i) {
-            x[i] = tx_[t + i] - sh[0] * L[0];
-            y[i] = ty_[t + i] - sh[1] * L[1];
-            z[i] = tz_[t + i] - sh[2] * L[2];
-          }
+          grid_shifted_targets(g, t, m, sh, x, y, z);
           gx.assign(m, 0.0);
           gy.assign(m, 0.0);
           gz.assign(m, 0.0);
@@ -135,7 +127,7 @@ template <class K> void FmmEvaluator<K>::grid_offset_field(Communicator *comm, d
     }
     grid_reduce(comm, mom, 13);
     constexpr double pi = 3.14159265358979323846;
-    const double V = L[0] * L[1] * L[2], cN = -2.0 * pi / (5.0 * V);
+    const double V = g.L[0] * g.L[1] * g.L[2], cN = -2.0 * pi / (5.0 * V);
     const double Q = mom[0], *M1 = mom + 1, *M2 = mom + 4, trM2 = M2[0] + M2[4] + M2[8];
 #pragma omp parallel for schedule(static)
     for (int b = 0; b < kc; ++b) {

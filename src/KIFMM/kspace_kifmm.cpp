@@ -130,7 +130,7 @@ double KSpaceKIFMM::strength_of(int i) const
 bigint KSpaceKIFMM::count_strong_atoms() const
 {
   bigint mine = 0, all = 0;
-  for (int i = 0; i < atom->nlocal; ++i) mine += strength_of(i) != 0.0;
+  for (int i = 0; i < atom->nlocal; ++i) mine += is_point(i);
   MPI_Allreduce(&mine, &all, 1, MPI_LMP_BIGINT, MPI_SUM, world);
   return all;
 }
@@ -172,6 +172,7 @@ void KSpaceKIFMM::init()
   scale = 1.0;
   if (kset.kernel != LongRangeKernel::Gravity) qsum_qsq(0);
   periodic_init();    // p p p: checks, net-charge warning (kspace_kifmm_periodic.cpp)
+  dipole_init();      // atoms with dipole moments (kspace_kifmm_dipoles.cpp)
 
   // a coulomb pair style would count coulomb a second time (kifmm sums everything)
   if (force->pair && kset.kernel != LongRangeKernel::Gravity && comm->me == 0 &&
@@ -399,21 +400,33 @@ void KSpaceKIFMM::gather_points()
   index.clear();
   xyz.clear();
   strength.clear();
+  moment.clear();
   for (int i = 0; i < nlocal; ++i) {
     const double s = strength_of(i);
     if (!std::isfinite(s) || !std::isfinite(x[i][0]) || !std::isfinite(x[i][1]) ||
         !std::isfinite(x[i][2]))
       error->one(FLERR, "kspace_style kifmm: atom {} has a non-finite {} or position",
                  atom->tag[i], kset.kernel == LongRangeKernel::Gravity ? "mass" : "charge");
-    if (s == 0.0) continue;    // zero strength: neither source nor target
+    if (atom->mu_flag && !dipoles && (atom->mu[i][0] != 0.0 || atom->mu[i][1] != 0.0 || atom->mu[i][2] != 0.0))
+      error->one(FLERR, "kspace_style kifmm: atom {} has a dipole moment, but none had one when the run was "
+                 "set up (the sum includes dipoles only when some atom has a moment at the start of a run)",
+                 atom->tag[i]);
+    if (dipoles && !(std::isfinite(atom->mu[i][0]) && std::isfinite(atom->mu[i][1]) && std::isfinite(atom->mu[i][2])))
+      error->one(FLERR, "kspace_style kifmm: atom {} has a non-finite dipole moment", atom->tag[i]);
+    if (!is_point(i)) continue;    // zero strength (and no moment): neither source nor target
     index.push_back(i);
     xyz.insert(xyz.end(), {x[i][0], x[i][1], x[i][2]});
     strength.push_back(s);
+    if (dipoles) moment.insert(moment.end(), {atom->mu[i][0], atom->mu[i][1], atom->mu[i][2]});
   }
 }
 
 void KSpaceKIFMM::evaluate_points(bool want_potential, double &comm_time, std::size_t &nsrc)
 {
+  if (dipoles) {
+    evaluate_dipole_points(want_potential, comm_time, nsrc);
+    return;
+  }
   const std::size_t n = index.size();
   pot.assign(want_potential ? n : 0, 0.0);
   grad.assign(3 * n, 0.0);
@@ -507,20 +520,19 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   if (action == Stride::Evaluate) schedule->begin_evaluation();
   for (std::size_t k = 0; k < n; ++k) {
     const int i = index[k];
-    const double s = strength[k];
-    const double fx = cf * s * grad[3 * k], fy = cf * s * grad[3 * k + 1],
-                 fz = cf * s * grad[3 * k + 2];
+    double fk[3], tk[3];
+    point_force(k, cf, fk, tk);
+    const double fx = fk[0], fy = fk[1], fz = fk[2];
     if (apply) {
       f[i][0] += fscale * fx;
       f[i][1] += fscale * fy;
       f[i][2] += fscale * fz;
+      if (dipoles)
+        for (int d = 0; d < 3; ++d) atom->torque[i][d] += fscale * tk[d];
     }
-    if (action == Stride::Evaluate) {
-      const double fk[3] = {fx, fy, fz};
-      schedule->store(i, fk, &xyz[3 * k]);
-    }
+    if (action == Stride::Evaluate) schedule->store(i, fk, &xyz[3 * k]);
     if (want_potential) {
-      const double e = 0.5 * ce * s * pot[k];
+      const double e = point_energy(k, ce);
       e_local += e;
       if (eflag_atom) eatom[i] += e;
     }
@@ -548,6 +560,9 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   if (tensor && (vflag_global || keep || vflag_atom)) periodic_tensor_virial(cf, vflag_global || keep, vflag_atom);
   if (action == Stride::Evaluate) schedule->end_evaluation(energy, virial);
 
+  if (vflag_atom && dipoles)
+    error->all(FLERR, "kspace_style kifmm: per-atom virial (compute stress/atom) with point dipoles is not "
+               "available in this version");
   if (vflag_atom && !periodic && nsrc > 0) {
     double center[3] = {0, 0, 0};
     per_atom_virial(cf, center);

@@ -1,7 +1,8 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // kspace_style kifmm: the full long-range sum (no real-space split) by the KIFMM engine.
 // Kernels: coulomb (atom q, qqrd2e), gravity (mass, G, attractive), yukawa (screened coulomb
-// as pair coul/debye). Open boundaries, or p p p with a cubic box (kspace_kifmm_periodic.cpp). Thin adapter: collects the atoms of nonzero strength,
+// as pair coul/debye); point dipoles with open boundaries (kspace_kifmm_dipoles.cpp). Open
+// boundaries, or periodic ones (kspace_kifmm_periodic.cpp). Thin adapter: collects the atoms of nonzero strength,
 // calls kifmm::Evaluator, scatters forces, energy and virial. See doc/kspace_kifmm.rst.
 // MPI: on more than one rank the engine's distributed evaluation (each rank passes its own
 // atoms; no all-gather), open or periodic boundaries.
@@ -57,6 +58,18 @@ class KSpaceKIFMM : public KSpace {
   std::vector<int> index;              // local atom index of each point
   std::vector<double> xyz, strength;   // positions, q or m
   std::vector<double> pot, grad;
+  // point dipoles (kspace_kifmm_dipoles.cpp): on when atoms have nonzero moments mu at init;
+  // then the points are the atoms with a charge or a moment, moment holds mu (3 per point) and
+  // hess the second derivatives of the potential (6 per point: xx yy zz xy xz yz)
+  bool dipoles = false;
+  std::vector<double> moment, hess;
+  void dipole_init();
+  bool is_point(int i) const;    // a source and target of the sum
+  void gather_all_dipoles(std::vector<double> &all_xyz, std::vector<double> &all_q, std::vector<double> &all_mu);
+  void evaluate_dipole_points(bool want_potential, double &comm_time, std::size_t &nsrc);
+  // force and torque of point k (torque zero without dipoles), its energy
+  void point_force(std::size_t k, double prefactor, double f[3], double t[3]) const;
+  double point_energy(std::size_t k, double prefactor) const;
   // more than one rank: distributed evaluation over this communicator (world), open or
   // periodic boundaries; one rank uses the serial evaluate() (with its mutual near field)
   std::unique_ptr<kifmm::Communicator> kcomm;
@@ -75,12 +88,13 @@ class KSpaceKIFMM : public KSpace {
   // measured error (kspace_kifmm_error.cpp): sampled against the exact sum, on free atoms'
   // forces and on rigid clumps' net forces and torques (negative: nothing of that kind)
   struct MeasuredError {
-    double atoms = -1, clump_force = -1, clump_torque = -1;
+    double atoms = -1, clump_force = -1, clump_torque = -1, torques = -1;    // torques: of dipoles
     bigint natoms = 0, nclumps = 0;
     double worst() const;
     std::string describe() const;
   };
   MeasuredError measure_error(int nsamples);
+  MeasuredError measure_dipole_error(int nsamples);
   void check_error();
   // order from the accuracy: at the first evaluation of a run the error is measured on the
   // atoms and the order raised until the request is met, or lowered while it is still met

@@ -41,11 +41,12 @@ double body_hash(tagint tag, unsigned long long seed)
 
 double KSpaceKIFMM::MeasuredError::worst() const
 {
-  return std::max(atoms, std::max(clump_force, clump_torque));
+  return std::max(std::max(atoms, torques), std::max(clump_force, clump_torque));
 }
 
 KSpaceKIFMM::MeasuredError KSpaceKIFMM::measure_error(int nsamples)
 {
+  if (dipoles) return measure_dipole_error(nsamples);    // forces and torques (kspace_kifmm_dipoles.cpp)
   const std::size_t n = index.size();
   const bool with_bodies = !point_body.empty();
   auto is_free = [&](std::size_t k) { return !with_bodies || point_body[k] == 0; };
@@ -167,6 +168,7 @@ std::string KSpaceKIFMM::MeasuredError::describe() const
 {
   std::string s;
   if (natoms > 0) s += fmt::format("forces of {} atoms {:.3e}", natoms, atoms);
+  if (natoms > 0 && torques >= 0) s += fmt::format(", torques {:.3e}", torques);
   if (nclumps > 0) {
     if (!s.empty()) s += "; ";
     s += fmt::format("net forces of {} clumps {:.3e}", nclumps, clump_force);
@@ -217,7 +219,7 @@ void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::s
     struct Kept {
       std::unique_ptr<kifmm::Evaluator> engine;
       kifmm::Options options;
-      std::vector<double> grad, pot;
+      std::vector<double> grad, pot, hess;
       MeasuredError m;
     } kept;
     Trials(KSpaceKIFMM &k, bool wp, double &ct, std::size_t &ns, int nsam, double t) :
@@ -259,12 +261,14 @@ void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::s
       kept.engine = std::move(ks.engine);
       kept.grad = ks.grad;
       kept.pot = ks.pot;
+      kept.hess = ks.hess;
       kept.m = m;
     }
     // the free atoms' forces over all of them (none in clumps: their net forces and torques
     // are measured on the sample only)
     double difference_from_kept() override
     {
+      if (ks.dipoles) return -1;    // q grad is not the force of a dipole: the sampled errors decide
       int mine_bodies = ks.point_body.empty() ? 0 : 1, any_bodies = 0;
       MPI_Allreduce(&mine_bodies, &any_bodies, 1, MPI_INT, MPI_MAX, ks.world);
       if (any_bodies) return -1;
@@ -288,6 +292,7 @@ void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::s
       ks.engine_options = kept.options;
       ks.grad = kept.grad;
       ks.pot = kept.pot;
+      ks.hess = kept.hess;
       m = kept.m;
     }
   } trials(*this, want_potential, comm_time, nsrc, nsamples, verify_margin * kset.accuracy);

@@ -17,6 +17,16 @@ void direct_sum(const KernelSpec &kernel, std::size_t n_src, const double *src_x
     direct_sum_t(LaplaceKernel{}, n_src, src_xyz, src_q, n_trg, trg_xyz, pot, grad);
 }
 
+void direct_sum_dipoles(const KernelSpec &kernel, std::size_t n_src, const double *src_xyz, const double *src_q,
+                        const double *src_mu, std::size_t n_trg, const double *trg_xyz, double *pot, double *grad,
+                        double *hess)
+{
+  if (kernel.type == KernelType::Yukawa)
+    direct_sum_dipoles_t(YukawaKernel{kernel.kappa}, n_src, src_xyz, src_q, src_mu, n_trg, trg_xyz, pot, grad, hess);
+  else
+    direct_sum_dipoles_t(LaplaceKernel{}, n_src, src_xyz, src_q, src_mu, n_trg, trg_xyz, pot, grad, hess);
+}
+
 namespace {
 template <class K>
 void group_pair_sum_t(const K &k, std::size_t n, const double *xyz, const double *q, double *pot,

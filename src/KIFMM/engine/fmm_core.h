@@ -36,6 +36,7 @@
 
 #include <algorithm>
 #include <memory>
+#include <stdexcept>
 #include <vector>
 
 namespace kifmm {
@@ -81,6 +82,8 @@ template <class K> class FmmEvaluator : public Evaluator {
                 const double *trg_xyz, double *pot, double *grad) override;
   void evaluate_distributed(Communicator &comm, std::size_t n, const double *xyz, const double *q, double *pot,
                             double *grad) override;
+  void evaluate_dipoles(std::size_t n_src, const double *src_xyz, const double *src_q, const double *src_mu,
+                        std::size_t n_trg, const double *trg_xyz, double *pot, double *grad, double *hess) override;
   const Stats &stats() const override { return stats_; }
   const KernelSpec &kernel() const override { return spec_; }
   const Options &options() const override { return opt_; }
@@ -116,6 +119,11 @@ template <class K> class FmmEvaluator : public Evaluator {
   std::unique_ptr<M2LTransform> fft_;
   // sorted points (structure of arrays)
   std::vector<double> sx_, sy_, sz_, sq_, tx_, ty_, tz_, tp_, tgx_, tgy_, tgz_;
+  // evaluate_dipoles: the sources' dipole moments (input order while dip_mu_ is set, then
+  // sorted) and the targets' second derivatives (th_[0..5] = xx yy zz xy xz yz when hess_)
+  const double *dip_mu_ = nullptr;
+  bool hess_ = false;
+  std::vector<double> smx_, smy_, smz_, th_[6];
   std::vector<double> up_equiv_, dn_check_, dn_equiv_, xhat_, yhat_;
   std::vector<char> has_local_;
   std::vector<char> up_mask_;    // distributed: cells whose upward density is computed (empty = all)
@@ -133,6 +141,9 @@ template <class K> class FmmEvaluator : public Evaluator {
   // near-field spans of the sorted points: sources (with strengths), targets, accumulators
   PointSpan source_range(std::size_t s0, std::size_t n) const
   {
+    if (dip_mu_)
+      return {n, sx_.data() + s0, sy_.data() + s0, sz_.data() + s0, sq_.data() + s0, smx_.data() + s0,
+              smy_.data() + s0, smz_.data() + s0};
     return {n, sx_.data() + s0, sy_.data() + s0, sz_.data() + s0, sq_.data() + s0};
   }
   PointSpan source_span(const Cell &c) const { return source_range(c.src_begin, c.n_src()); }
@@ -141,7 +152,14 @@ template <class K> class FmmEvaluator : public Evaluator {
     return {n, tx_.data() + t0, ty_.data() + t0, tz_.data() + t0, nullptr};
   }
   PointSpan target_span(const Cell &c) const { return target_range(c.trg_begin, c.n_trg()); }
-  ResultSpan result_at(std::size_t t0) { return {tp_.data() + t0, tgx_.data() + t0, tgy_.data() + t0, tgz_.data() + t0}; }
+  ResultSpan result_at(std::size_t t0)
+  {
+    if (hess_)
+      return {tp_.data() + t0,    tgx_.data() + t0,   tgy_.data() + t0,   tgz_.data() + t0,
+              th_[0].data() + t0, th_[1].data() + t0, th_[2].data() + t0, th_[3].data() + t0,
+              th_[4].data() + t0, th_[5].data() + t0};
+    return {tp_.data() + t0, tgx_.data() + t0, tgy_.data() + t0, tgz_.data() + t0};
+  }
   ResultSpan result_span(const Cell &c) { return result_at(c.trg_begin); }
   // surface points (with densities as strengths)
   PointSpan surface_span(const SurfacePoints &s, const double *density) const
@@ -437,6 +455,18 @@ void FmmEvaluator<K>::sorted_copies(std::size_t ns, const double *sxyz, const do
     sz_[i] = sxyz[3 * j + 2];
     sq_[i] = sq[j];
   }
+  if (dip_mu_) {
+    smx_.resize(ns);
+    smy_.resize(ns);
+    smz_.resize(ns);
+#pragma omp parallel for schedule(static)
+    for (std::size_t i = 0; i < ns; ++i) {
+      const std::size_t j = tree_.src_order[i];
+      smx_[i] = dip_mu_[3 * j];
+      smy_[i] = dip_mu_[3 * j + 1];
+      smz_[i] = dip_mu_[3 * j + 2];
+    }
+  }
 #pragma omp parallel for schedule(static)
   for (std::size_t i = 0; i < n_trg; ++i) {
     const std::size_t j = tree_.trg_order[i];
@@ -467,6 +497,7 @@ template <class K> void FmmEvaluator<K>::reset_accumulators(std::size_t n_trg)
   tgx_.assign(n_trg, 0.0);
   tgy_.assign(n_trg, 0.0);
   tgz_.assign(n_trg, 0.0);
+  for (auto &h : th_) h.assign(hess_ ? n_trg : 0, 0.0);
 }
 
 template <class K> void FmmEvaluator<K>::results_to_input_order(std::size_t n_trg, double *pot, double *grad) const
@@ -802,6 +833,59 @@ void FmmEvaluator<K>::evaluate_tree(double t0, std::size_t ns, const double *sxy
                         sx_.size() * 4 + tx_.size() * 7);
 }
 
+// Charges and dipoles: the tree passes of evaluate() with dipole sources in the spans of the
+// source points (P2M, P2L, near field) and second derivatives in the spans of the targets
+// (near field, M2P, L2P); the near field is one-sided (no mutual pairs).
+template <class K>
+void FmmEvaluator<K>::evaluate_dipoles(std::size_t n_src, const double *src_xyz, const double *src_q,
+                                       const double *src_mu, std::size_t n_trg, const double *trg_xyz, double *pot,
+                                       double *grad, double *hess)
+{
+  if (opt_.periodic) throw std::invalid_argument("kifmm: point dipoles need open boundaries");
+  if (!has_derivs3<K>::value) throw std::invalid_argument("kifmm: this kernel has no third derivatives: no dipoles");
+  stats_ = Stats{};
+  stats_.n_targets = n_trg;
+  if (pot) std::fill(pot, pot + n_trg, 0.0);
+  if (grad) std::fill(grad, grad + 3 * n_trg, 0.0);
+  if (hess) std::fill(hess, hess + 6 * n_trg, 0.0);
+  if (n_trg == 0 || (!pot && !grad && !hess)) return;
+  const double t = omp_get_wtime();
+  std::vector<double> kxyz, kq, kmu;    // sources with a charge or a dipole
+  for (std::size_t j = 0; j < n_src; ++j) {
+    const double q = src_q ? src_q[j] : 0.0;
+    const double *m = src_mu ? src_mu + 3 * j : nullptr;
+    if (q == 0.0 && (!m || (m[0] == 0.0 && m[1] == 0.0 && m[2] == 0.0))) continue;
+    kxyz.insert(kxyz.end(), src_xyz + 3 * j, src_xyz + 3 * j + 3);
+    kq.push_back(q);
+    for (int d = 0; d < 3; ++d) kmu.push_back(m ? m[d] : 0.0);
+  }
+  const std::size_t ns = kq.size();
+  stats_.n_sources = ns;
+  if (ns == 0) return;
+  struct Mode {    // the dipole spans for this call only (also when a pass throws)
+    FmmEvaluator &e;
+    ~Mode() { e.dip_mu_ = nullptr, e.hess_ = false; }
+  } mode{*this};
+  dip_mu_ = src_mu ? kmu.data() : nullptr;
+  hess_ = hess != nullptr;
+  std::vector<double> g;
+  double *gr = grad;
+  if (!gr) {    // the second derivatives come with the gradient
+    g.resize(3 * n_trg);
+    gr = g.data();
+  }
+  evaluate_tree(t, ns, kxyz.data(), kq.data(), n_trg, trg_xyz, pot, gr);
+  if (hess) {
+#pragma omp parallel for schedule(static)
+    for (std::size_t i = 0; i < n_trg; ++i) {
+      const std::size_t j = tree_.trg_order[i];
+      for (int c = 0; c < 6; ++c) hess[6 * j + c] = th_[c][i];
+    }
+  }
+  if (src_xyz == trg_xyz && n_src == n_trg && ns == n_src && stats_.coincident_pairs >= ns)
+    stats_.coincident_pairs -= ns;
+}
+
 // ---- open boundaries
 
 template <class K> typename FmmEvaluator<K>::BoundarySteps FmmEvaluator<K>::open_steps()
@@ -816,7 +900,7 @@ template <class K> void FmmEvaluator<K>::open_plan_mutual(const std::vector<char
 {
   mutual_.clear();
   if (own_only) plan_mutual_partial(tree_, lists_, *own_only, mutual_);
-  else if (same_sorted_points()) plan_mutual_open(tree_, lists_, mutual_, nsurf_);
+  else if (same_sorted_points() && !dip_mu_ && !hess_) plan_mutual_open(tree_, lists_, mutual_, nsurf_);
 }
 
 }    // namespace kifmm

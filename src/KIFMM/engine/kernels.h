@@ -15,6 +15,11 @@
 //        half-width h are those of K' at unit half-width (cache key = K'.id()).
 //   std::string id() const;                  unique name for the operator caches.
 // A kernel with none of these gets per-level operators computed at the physical box size.
+//
+// Optional, for dipole sources and field gradients at targets (evaluate_dipoles):
+//   void derivs3(double r2, double invr, double &G, double &F, double &H, double &T) const;
+//        G, F = G'/r, H = F'/r, T = H'/r: the derivatives of G(|d|) in d up to the third are
+//        dG = F d, ddG = F I + H d d, dddG_abc = H (d_a I_bc + d_b I_ac + d_c I_ab) + T d_a d_b d_c.
 #pragma once
 
 #include <cmath>
@@ -66,6 +71,14 @@ struct LaplaceKernel {
     G = invr;
     F = -invr * invr * invr;
   }
+  void derivs3(double, double invr, double &G, double &F, double &H, double &T) const
+  {
+    const double i2 = invr * invr;
+    G = invr;
+    F = -G * i2;
+    H = -3.0 * F * i2;
+    T = -5.0 * H * i2;
+  }
   std::string id() const { return "laplace"; }
 };
 
@@ -78,6 +91,14 @@ struct YukawaKernel {
     const double r = r2 * invr;
     G = exp_accurate(-kappa * r) * invr;
     F = -G * (1.0 + kappa * r) * invr * invr;
+  }
+  void derivs3(double r2, double invr, double &G, double &F, double &H, double &T) const
+  {
+    const double kr = kappa * r2 * invr, i2 = invr * invr;
+    G = exp_accurate(-kr) * invr;
+    F = -G * (1.0 + kr) * i2;
+    H = G * (3.0 + kr * (3.0 + kr)) * i2 * i2;
+    T = -G * (15.0 + kr * (15.0 + kr * (6.0 + kr))) * i2 * i2 * i2;
   }
   // G_kappa(h u) = (1/h) G_{kappa h}(u)
   YukawaKernel rescaled(double h, double &s) const

@@ -8,6 +8,8 @@
 #pragma once
 
 #include "kernels.h"
+#include "p2p_dipole.h"
+#include "point_spans.h"
 
 #include <cmath>
 #include <cstddef>
@@ -18,19 +20,6 @@
 #endif
 
 namespace kifmm {
-
-// Points of a near-field call (structure of arrays): n points at x, y, z with strengths q
-// (sources; targets leave q null).
-struct PointSpan {
-  std::size_t n = 0;
-  const double *x = nullptr, *y = nullptr, *z = nullptr, *q = nullptr;
-};
-
-// Accumulators of the targets (results are ADDED): potential and gradient components; a
-// component that is not computed may be null.
-struct ResultSpan {
-  double *pot = nullptr, *gx = nullptr, *gy = nullptr, *gz = nullptr;
-};
 
 #if defined(__AVX512F__)
 // Laplace with AVX-512: 1/sqrt from vrsqrt14pd (14 bits) refined by one 4th-order step
@@ -97,6 +86,10 @@ template <class K, bool POT, bool GRAD, bool COUNT>
 inline void p2p(const K &k, const PointSpan &t, const PointSpan &s, const ResultSpan &r,
                 std::size_t *n_zero = nullptr)
 {
+  if (s.mx || r.hxx) {    // dipole sources or field gradients at the targets (p2p_dipole.h)
+    p2p_dipole<K, POT, GRAD, COUNT>(k, t, s, r, n_zero);
+    return;
+  }
 #if defined(__AVX512F__)
   if constexpr (std::is_same_v<K, LaplaceKernel>) {
     p2p_laplace_avx512<POT, GRAD, COUNT>(t, s, r, n_zero);

@@ -101,6 +101,18 @@ class Evaluator {
   virtual void evaluate_distributed(Communicator &comm, std::size_t n, const double *xyz, const double *q,
                                     double *pot, double *grad) = 0;
 
+  // Charges and point dipoles (open boundaries): sources with charges q (may be null: none)
+  // and dipole moments mu (3 per source, interleaved; may be null: none) act on targets:
+  //   pot[i]  = sum_j q_j G(x_i - y_j) + mu_j . grad_y G(x_i - y_j),
+  //   grad    = its gradient (3 per target), hess (may be null) its second derivatives,
+  //             6 per target in the order xx yy zz xy xz yz (the field gradient is -hess).
+  // Sources with q == 0 and mu == 0 are skipped; pairs at r = 0 are excluded. The kernel needs
+  // third derivatives (Laplace and Yukawa have them). Throws std::invalid_argument with
+  // periodic boundaries.
+  virtual void evaluate_dipoles(std::size_t n_src, const double *src_xyz, const double *src_q,
+                                const double *src_mu, std::size_t n_trg, const double *trg_xyz, double *pot,
+                                double *grad, double *hess) = 0;
+
   virtual const Stats &stats() const = 0;
   virtual const KernelSpec &kernel() const = 0;
   virtual const Options &options() const = 0;
@@ -127,6 +139,11 @@ std::unique_ptr<Evaluator> make_evaluator(const KernelSpec &kernel, const Option
 void direct_sum(const KernelSpec &kernel, std::size_t n_src, const double *src_xyz,
                 const double *src_q, std::size_t n_trg, const double *trg_xyz, double *pot,
                 double *grad);
+
+// Exact O(N*M) reference of evaluate_dipoles (same conventions; hess may be null).
+void direct_sum_dipoles(const KernelSpec &kernel, std::size_t n_src, const double *src_xyz, const double *src_q,
+                        const double *src_mu, std::size_t n_trg, const double *trg_xyz, double *pot, double *grad,
+                        double *hess);
 
 // All pairs inside one small group of n points (e.g. the pebbles of a rigid body), O(n^2),
 // serial, same kernel and conventions as direct_sum (r = 0 pairs excluded): for every point i,

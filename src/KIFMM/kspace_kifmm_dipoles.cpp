@@ -1,0 +1,179 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
+// Point dipoles in kspace_style kifmm (atoms with a dipole moment mu: atom_style dipole,
+// hybrid sphere dipole): the engine's evaluate_dipoles gives at every atom the potential phi of
+// all charges and dipoles, its gradient g and its second derivatives h; then
+//   F_i   = -qqrd2e (q_i g_i + h_i mu_i)        (q E + (mu . grad) E)
+//   tau_i = -qqrd2e mu_i x g_i                  (mu x E)
+//   U     = qqrd2e / 2 sum_i (q_i phi_i + mu_i . g_i)
+// as pair lj/cut/dipole/cut sums them with a cutoff. Open boundaries; on several ranks every
+// rank evaluates its own atoms against the sources of all ranks (gathered). The measured error
+// covers forces and torques (sampled against the exact sum).
+#include "kspace_kifmm.h"
+
+#include "atom.h"
+#include "comm.h"
+#include "error.h"
+#include "update.h"
+
+#include <cmath>
+#include <mpi.h>
+
+using namespace LAMMPS_NS;
+using kifmm_lammps::LongRangeKernel;
+
+namespace {
+bool has_moment(const double *mu)
+{
+  return mu[0] != 0.0 || mu[1] != 0.0 || mu[2] != 0.0;
+}
+// force q g + h mu and torque mu x g of a point (without the prefactor -qqrd2e)
+void dipole_force_torque(double q, const double *mu, const double *g, const double *h, double f[3], double t[3])
+{
+  f[0] = q * g[0] + h[0] * mu[0] + h[3] * mu[1] + h[4] * mu[2];
+  f[1] = q * g[1] + h[3] * mu[0] + h[1] * mu[1] + h[5] * mu[2];
+  f[2] = q * g[2] + h[4] * mu[0] + h[5] * mu[1] + h[2] * mu[2];
+  t[0] = mu[1] * g[2] - mu[2] * g[1];
+  t[1] = mu[2] * g[0] - mu[0] * g[2];
+  t[2] = mu[0] * g[1] - mu[1] * g[0];
+}
+}    // namespace
+
+// Dipole mode when the atom style has dipole moments and some atom's is not zero. Checked at
+// init: what the dipole sum does not cover yet is an error naming it.
+void KSpaceKIFMM::dipole_init()
+{
+  dipoles = false;
+  if (!atom->mu_flag) return;
+  int mine = 0, any = 0;
+  for (int i = 0; i < atom->nlocal && !mine; ++i) mine = has_moment(atom->mu[i]);
+  MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_MAX, world);
+  if (!any) return;
+  dipoles = true;
+  if (kset.kernel == LongRangeKernel::Gravity)
+    error->all(FLERR, "kspace_style kifmm kernel gravity has no dipoles: the atoms have dipole moments (mu); "
+                      "use kernel coulomb or yukawa");
+  if (periodic)
+    error->all(FLERR, "kspace_style kifmm: point dipoles (atoms with a dipole moment mu) need open boundaries "
+                      "(boundary f or s in all three directions) in this version");
+  if (!atom->torque_flag)
+    error->all(FLERR, "kspace_style kifmm: atoms with dipole moments need atom attribute torque "
+                      "(atom_style hybrid sphere dipole)");
+  if (schedule)
+    error->all(FLERR, "fix kifmm/stride does not support point dipoles (atoms with a dipole moment mu) in "
+                      "this version");
+  if (!bodies.empty())
+    error->all(FLERR, "kspace_style kifmm: point dipoles (atoms with a dipole moment mu) in rigid clumps "
+                      "(fix clump/rigid) are not supported in this version");
+}
+
+bool KSpaceKIFMM::is_point(int i) const
+{
+  return strength_of(i) != 0.0 || (dipoles && has_moment(atom->mu[i]));
+}
+
+// The gathered points of all ranks (positions, charges, moments), for the sources of a
+// dipole evaluation on several ranks and for the exact reference of the error check.
+void KSpaceKIFMM::gather_all_dipoles(std::vector<double> &all_xyz, std::vector<double> &all_q,
+                                     std::vector<double> &all_mu)
+{
+  std::vector<int> counts;
+  kcomm->allgatherv(xyz, all_xyz, counts);
+  kcomm->allgatherv(strength, all_q, counts);
+  kcomm->allgatherv(moment, all_mu, counts);
+}
+
+void KSpaceKIFMM::evaluate_dipole_points(bool want_potential, double &comm_time, std::size_t &nsrc)
+{
+  const std::size_t n = index.size();
+  pot.assign(want_potential ? n : 0, 0.0);
+  grad.assign(3 * n, 0.0);
+  hess.assign(6 * n, 0.0);
+  comm_time = 0;
+  if (distributed()) {
+    const double t0 = MPI_Wtime();
+    std::vector<double> all_xyz, all_q, all_mu;
+    gather_all_dipoles(all_xyz, all_q, all_mu);
+    comm_time = MPI_Wtime() - t0;
+    nsrc = all_q.size();
+    check_memory(nsrc);
+    engine->evaluate_dipoles(nsrc, all_xyz.data(), all_q.data(), all_mu.data(), n, xyz.data(),
+                             want_potential ? pot.data() : nullptr, grad.data(), hess.data());
+    unsigned long long mine = engine->stats().n_sources, all = 0;
+    MPI_Allreduce(&mine, &all, 1, MPI_UNSIGNED_LONG_LONG, MPI_MAX, world);
+    nsrc = all;
+  } else {
+    nsrc = strength.size();
+    check_memory(nsrc);
+    if (nsrc > 0)
+      engine->evaluate_dipoles(nsrc, xyz.data(), strength.data(), moment.data(), n, xyz.data(),
+                               want_potential ? pot.data() : nullptr, grad.data(), hess.data());
+  }
+}
+
+void KSpaceKIFMM::point_force(std::size_t k, double cf, double f[3], double t[3]) const
+{
+  const double s = strength[k];
+  if (!dipoles) {
+    for (int d = 0; d < 3; ++d) f[d] = cf * s * grad[3 * k + d], t[d] = 0.0;
+    return;
+  }
+  dipole_force_torque(s, &moment[3 * k], &grad[3 * k], &hess[6 * k], f, t);
+  for (int d = 0; d < 3; ++d) f[d] *= cf, t[d] *= cf;
+}
+
+double KSpaceKIFMM::point_energy(std::size_t k, double ce) const
+{
+  double e = strength[k] * pot[k];
+  if (dipoles)
+    for (int d = 0; d < 3; ++d) e += moment[3 * k + d] * grad[3 * k + d];
+  return 0.5 * ce * e;
+}
+
+// Sampled error of forces and torques against the exact sum over all ranks' points.
+KSpaceKIFMM::MeasuredError KSpaceKIFMM::measure_dipole_error(int nsamples)
+{
+  const std::size_t n = index.size();
+  std::vector<double> all_xyz, all_q, all_mu;
+  gather_all_dipoles(all_xyz, all_q, all_mu);
+  const double nall = (double) all_q.size();
+  const unsigned long long seed = 1234567ULL + 7919ULL * (unsigned long long) update->ntimestep;
+  std::vector<std::size_t> mine(n);
+  for (std::size_t k = 0; k < n; ++k) mine[k] = k;
+  const std::size_t want = nall > 0 ? (std::size_t) std::ceil(nsamples * (double) n / nall) : 0;
+  const std::vector<std::size_t> sample =
+      kifmm::sample_without_replacement(std::move(mine), want, seed + 104729ULL * (unsigned long long) comm->me);
+  const std::size_t m = sample.size();
+  std::vector<double> txyz(3 * m), g(3 * m), h(6 * m);
+  for (std::size_t s = 0; s < m; ++s)
+    for (int d = 0; d < 3; ++d) txyz[3 * s + d] = xyz[3 * sample[s] + d];
+  kifmm::direct_sum_dipoles(engine->kernel(), all_q.size(), all_xyz.data(), all_q.data(), all_mu.data(), m,
+                            txyz.data(), nullptr, g.data(), h.data());
+  // sums: force diff2, ref2, all evaluated force2; torque the same
+  double sums[6] = {0, 0, 0, 0, 0, 0}, tot[6];
+  double f[3], t[3], fe[3], te[3];
+  for (std::size_t k = 0; k < n; ++k) {
+    point_force(k, 1.0, f, t);
+    for (int d = 0; d < 3; ++d) sums[2] += f[d] * f[d], sums[5] += t[d] * t[d];
+  }
+  for (std::size_t s = 0; s < m; ++s) {
+    const std::size_t k = sample[s];
+    point_force(k, 1.0, f, t);
+    dipole_force_torque(strength[k], &moment[3 * k], &g[3 * s], &h[6 * s], fe, te);
+    for (int d = 0; d < 3; ++d) {
+      sums[0] += (f[d] - fe[d]) * (f[d] - fe[d]);
+      sums[1] += fe[d] * fe[d];
+      sums[3] += (t[d] - te[d]) * (t[d] - te[d]);
+      sums[4] += te[d] * te[d];
+    }
+  }
+  MPI_Allreduce(sums, tot, 6, MPI_DOUBLE, MPI_SUM, world);
+  bigint ms = (bigint) m, ms_all = 0;
+  MPI_Allreduce(&ms, &ms_all, 1, MPI_LMP_BIGINT, MPI_SUM, world);
+  MeasuredError e;
+  e.natoms = ms_all;
+  if (ms_all > 0) {
+    e.atoms = kifmm::sampled_relative_error(tot[0], tot[1], (double) ms_all, nall, tot[2]);
+    if (tot[4] > 0 || tot[3] > 0) e.torques = kifmm::sampled_relative_error(tot[3], tot[4], (double) ms_all, nall, tot[5]);
+  }
+  return e;
+}

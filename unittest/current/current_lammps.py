@@ -9,6 +9,9 @@ cases:
   kspace   a fixed kifmm input (open box, 500 charges, explicit order and leaf, fix
            kifmm/stride 2, 20 steps): forces at steps 0, 10, 20 equal those of --reference
            (lmp_kifmm) to 1e-12 relative
+  dipoles  point dipoles (atom_style hybrid sphere dipole, charges and moments from atom-style
+           variables, explicit order and leaf, fix nve/sphere update dipole, 20 steps): forces
+           and torques at steps 0, 10, 20 equal those of --reference (lmp_kifmm) to 1e-12
   mpi      the same input on 2 ranks (--mpirun) equals 1 rank to 1e-10
   clumps   fix clump/rigid with a molecule template, fix pour (rigid keyword) and the gravity
            keyword, charged pebbles under kspace kifmm: 5 clumps inserted with the union mass,
@@ -52,6 +55,42 @@ timestep 0.001
 thermo_style custom step pe elong ke
 thermo_modify norm no format float %.15g
 dump d all custom 10 forces.*.dump id x y z fx fy fz
+dump_modify d format float %.17g sort id
+run 20
+print "ELONG $(elong:%.17g)"
+"""
+
+DIPOLE_INPUT = """\
+units lj
+atom_style hybrid sphere dipole
+atom_modify map array
+boundary f f f
+lattice sc 1.3
+region box block 0 8 0 8 0 8
+create_box 1 box
+region inner block 0.5 7.5 0.5 7.5 0.5 7.5
+create_atoms 1 region inner
+variable dx atom 0.2*sin(1.7*x+0.3*y)
+variable dy atom 0.2*cos(1.1*z+0.5*x)
+variable dz atom 0.2*sin(0.9*y+1.3*z)
+displace_atoms all move v_dx v_dy v_dz units box
+variable q atom 0.5*sin(2.3*x+1.1*y-0.7*z)
+variable mx atom cos(1.9*y+0.2*z)
+variable my atom sin(0.8*x-1.4*z)
+variable mz atom cos(1.2*x+0.6*y)
+set group all charge v_q
+set group all dipole v_mx v_my v_mz
+pair_style zero 1.0
+pair_coeff * *
+kspace_style kifmm 1e-8
+kspace_modify kifmm order 8 leaf 20
+neighbor 0.3 bin
+velocity all create 0.3 4711 loop geom
+fix nve all nve/sphere update dipole
+timestep 0.002
+thermo_style custom step pe elong ke
+thermo_modify norm no format float %.15g
+dump d all custom 10 forces.*.dump id x y z fx fy fz tqx tqy tqz
 dump_modify d format float %.17g sort id
 run 20
 print "ELONG $(elong:%.17g)"
@@ -169,11 +208,11 @@ def read_dumps(d):
     return out
 
 
-def kspace_dir(lmp_cmd, plugin, work, name):
+def kspace_dir(lmp_cmd, plugin, work, name, script=KSPACE_INPUT):
     d = os.path.join(work, name)
     os.makedirs(d)
     write_charges(os.path.join(d, "data.kspace"))
-    text = (f"plugin load {plugin}\n" if plugin else "") + KSPACE_INPUT
+    text = (f"plugin load {plugin}\n" if plugin else "") + script
     with open(os.path.join(d, "in.kspace"), "w") as f:
         f.write(text)
     out = run(lmp_cmd + ["-in", "in.kspace", "-log", "log.lammps", "-nocite"], d)
@@ -189,10 +228,10 @@ def compare(a, b, tol, what):
         xscale = max(max(abs(v) for v in r[:3]) for r in rows.values())
         for i, r in rows.items():
             s = a[step][i]
-            for k in range(6):
+            for k in range(len(r)):
                 d = abs(s[k] - r[k]) / (scale if k >= 3 else xscale)
                 worst = max(worst, d)
-    print(f"{what}: largest difference {worst:.3e} (relative to the largest force/coordinate),"
+    print(f"{what}: largest difference {worst:.3e} (relative to the largest force, torque or coordinate),"
           f" tolerance {tol:g}, steps {sorted(b)}")
     if worst > tol:
         sys.exit(f"{what}: differ by {worst:.3e} > {tol:g}")
@@ -200,10 +239,10 @@ def compare(a, b, tol, what):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("case", choices=["kspace", "mpi", "clumps", "restart", "clumps-mpi", "python"])
+    ap.add_argument("case", choices=["kspace", "dipoles", "mpi", "clumps", "restart", "clumps-mpi", "python"])
     ap.add_argument("--lmp", required=True)
     ap.add_argument("--plugin", required=True)
-    ap.add_argument("--reference", help="lmp_kifmm (kspace)")
+    ap.add_argument("--reference", help="lmp_kifmm (kspace, dipoles)")
     ap.add_argument("--mpirun", nargs="+", help="mpirun command and its options (mpi)")
     ap.add_argument("--potentials", help="the package's potentials/ (clumps, restart)")
     ap.add_argument("--pythonpath", help="that LAMMPS's python/ directory (python)")
@@ -216,6 +255,13 @@ def main():
             d1, _ = kspace_dir([a.lmp], plugin, work, "current")
             d2, _ = kspace_dir([a.reference], None, work, "reference")
             compare(read_dumps(d1), read_dumps(d2), 1e-12, "plugin in current LAMMPS vs lmp_kifmm")
+        elif a.case == "dipoles":
+            d1, _ = kspace_dir([a.lmp], plugin, work, "current", DIPOLE_INPUT)
+            d2, _ = kspace_dir([a.reference], None, work, "reference", DIPOLE_INPUT)
+            steps = read_dumps(d2)
+            if sorted(steps) != [0, 10, 20] or any(len(r) != 9 for rows in steps.values() for r in rows.values()):
+                sys.exit("dipoles: the reference dumps lack steps or torque columns")
+            compare(read_dumps(d1), steps, 1e-12, "dipoles: plugin in current LAMMPS vs lmp_kifmm")
         elif a.case == "mpi":
             d1, _ = kspace_dir([a.lmp], plugin, work, "np1")
             d2, out = kspace_dir(a.mpirun + ["-np", "2", a.lmp], plugin, work, "np2")

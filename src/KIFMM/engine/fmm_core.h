@@ -191,8 +191,10 @@ template <class K> class FmmEvaluator : public Evaluator {
   void evaluate_tree(double t0, std::size_t ns, const double *sxyz, const double *sq, std::size_t n_trg,
                      const double *trg_xyz, double *pot, double *grad);
   // the sorted sources are the sorted targets (same points, same order)
+  // (not with dipoles: their near field is one-sided, p2p_mutual has no dipole loop)
   bool same_sorted_points() const
   {
+    if (dip_mu_ || hess_) return false;
     return sx_.size() == tx_.size() && tree_.src_order == tree_.trg_order && sx_ == tx_ && sy_ == ty_ && sz_ == tz_;
   }
   // mutual near field (sources = targets): open boundaries use mutual_, periodic plists_
@@ -833,15 +835,15 @@ void FmmEvaluator<K>::evaluate_tree(double t0, std::size_t ns, const double *sxy
                         sx_.size() * 4 + tx_.size() * 7);
 }
 
-// Charges and dipoles: the tree passes of evaluate() with dipole sources in the spans of the
-// source points (P2M, P2L, near field) and second derivatives in the spans of the targets
-// (near field, M2P, L2P); the near field is one-sided (no mutual pairs).
+// Charges and dipoles: the passes of evaluate() (tree or periodic grid) with dipole sources in
+// the spans of the source points (P2M, P2L, near field) and second derivatives in the spans of
+// the targets (near field, M2P, L2P); the near field is one-sided (no mutual pairs); periodic
+// Laplace: the dipoles' part of the background and of the grid's wrap correction.
 template <class K>
 void FmmEvaluator<K>::evaluate_dipoles(std::size_t n_src, const double *src_xyz, const double *src_q,
                                        const double *src_mu, std::size_t n_trg, const double *trg_xyz, double *pot,
                                        double *grad, double *hess)
 {
-  if (opt_.periodic) throw std::invalid_argument("kifmm: point dipoles need open boundaries");
   if (!has_derivs3<K>::value) throw std::invalid_argument("kifmm: this kernel has no third derivatives: no dipoles");
   stats_ = Stats{};
   stats_.n_targets = n_trg;
@@ -874,7 +876,10 @@ void FmmEvaluator<K>::evaluate_dipoles(std::size_t n_src, const double *src_xyz,
     g.resize(3 * n_trg);
     gr = g.data();
   }
-  evaluate_tree(t, ns, kxyz.data(), kq.data(), n_trg, trg_xyz, pot, gr);
+  const double *sxyz = kxyz.data();
+  (this->*boundary_.wrap)(ns, sxyz, n_trg, trg_xyz);    // periodic: into the cell (moments unchanged)
+  if (grid_) evaluate_grid(ns, sxyz, kq.data(), n_trg, trg_xyz, pot, gr, false);
+  else evaluate_tree(t, ns, sxyz, kq.data(), n_trg, trg_xyz, pot, gr);
   if (hess) {
 #pragma omp parallel for schedule(static)
     for (std::size_t i = 0; i < n_trg; ++i) {
@@ -900,7 +905,7 @@ template <class K> void FmmEvaluator<K>::open_plan_mutual(const std::vector<char
 {
   mutual_.clear();
   if (own_only) plan_mutual_partial(tree_, lists_, *own_only, mutual_);
-  else if (same_sorted_points() && !dip_mu_ && !hess_) plan_mutual_open(tree_, lists_, mutual_, nsurf_);
+  else if (same_sorted_points()) plan_mutual_open(tree_, lists_, mutual_, nsurf_);
 }
 
 }    // namespace kifmm

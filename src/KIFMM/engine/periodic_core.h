@@ -171,7 +171,7 @@ template <class K> void FmmEvaluator<K>::periodic_root_operator()
 }
 
 // Laplace: the quadratic part quad sum_j q_j |x - y_j|^2 of the lattice sum (periodic.h), from
-// the moments of the sources about the cell center c (sorted sources with input index below
+// the moments of the sources about the cell center c (dipoles: mu_j . grad_y of that term) (sorted sources with input index below
 // own_sources; distributed: this rank's own, the moments are then summed over ranks)
 template <class K>
 void FmmEvaluator<K>::periodic_background_moments(double quad, const double c[3], std::size_t own_sources)
@@ -187,6 +187,12 @@ void FmmEvaluator<K>::periodic_background_moments(double quad, const double c[3]
     periodic_moments_[2] += sq_[j] * dy;
     periodic_moments_[3] += sq_[j] * dz;
     periodic_moments_[4] += sq_[j] * (dx * dx + dy * dy + dz * dz);
+    if (dip_mu_) {    // a dipole is the limit of a charge pair: mu . grad_y of q |x - y|^2
+      periodic_moments_[1] += smx_[j];
+      periodic_moments_[2] += smy_[j];
+      periodic_moments_[3] += smz_[j];
+      periodic_moments_[4] += 2.0 * (smx_[j] * dx + smy_[j] * dy + smz_[j] * dz);
+    }
   }
 }
 
@@ -203,6 +209,9 @@ template <class K> void FmmEvaluator<K>::add_periodic_background(bool want_pot, 
     tgy_[i] += 2 * a * (m[0] * dy - m[2]);
     tgz_[i] += 2 * a * (m[0] * dz - m[3]);
   }
+  if (hess_)    // second derivatives: 2 a Q on the diagonal
+    for (int d = 0; d < 3; ++d)
+      for (double &h : th_[d]) h += 2 * a * m[0];
 }
 
 namespace periodic_top {

@@ -218,6 +218,7 @@ void FmmEvaluator<K>::grid_passes(Communicator *comm, std::size_t own_sources, b
     tgx_.assign(nt, 0.0);
     tgy_.assign(nt, 0.0);
     tgz_.assign(nt, 0.0);
+    for (auto &h : th_) h.assign(hess_ ? nt : 0, 0.0);
     const double t2 = omp_get_wtime();
     grid_p2m(g);
     // cells with sources on any rank; the densities of the whole cells
@@ -233,7 +234,8 @@ void FmmEvaluator<K>::grid_passes(Communicator *comm, std::size_t own_sources, b
     grid_l2p(g, want_pot);
     const double t5 = omp_get_wtime();
     stats_.t_downward = t5 - t4;
-    stats_.coincident_pairs = same_points ? grid_near_mutual(g, want_pot) : grid_near_one_sided(g, want_pot);
+    stats_.coincident_pairs =
+        same_points && !dip_mu_ && !hess_ ? grid_near_mutual(g, want_pot) : grid_near_one_sided(g, want_pot);
     stats_.t_p2p = omp_get_wtime() - t5;
     // ---- Laplace background (non-harmonic part of G_per), exact from the moments
     const double quad = grid_kernel_->quad / (g.h * g.h * g.h);
@@ -458,6 +460,10 @@ void FmmEvaluator<K>::grid_wrap_correction(const GridGeometry &g, Communicator *
       for (int d = 0; d < 3; ++d) {
         Qa[off[d] + sa[d]] += sq_[j];
         Pa[off[d] + sa[d]] += sq_[j] * y[d];
+      }
+      if (dip_mu_) {    // a dipole's part of its cell's dipole moment
+        const double mu[3] = {smx_[j], smy_[j], smz_[j]};
+        for (int d = 0; d < 3; ++d) Pa[off[d] + sa[d]] += mu[d];
       }
     }
   }

@@ -107,8 +107,8 @@ class Evaluator {
   //   grad    = its gradient (3 per target), hess (may be null) its second derivatives,
   //             6 per target in the order xx yy zz xy xz yz (the field gradient is -hess).
   // Sources with q == 0 and mu == 0 are skipped; pairs at r = 0 are excluded. The kernel needs
-  // third derivatives (Laplace and Yukawa have them). Throws std::invalid_argument with
-  // periodic boundaries.
+  // third derivatives (Laplace and Yukawa have them). Open and periodic boundaries (periodic
+  // Laplace: tin-foil, as for charges, with the total dipole sum_j q_j y_j + mu_j); one process.
   virtual void evaluate_dipoles(std::size_t n_src, const double *src_xyz, const double *src_q,
                                 const double *src_mu, std::size_t n_trg, const double *trg_xyz, double *pot,
                                 double *grad, double *hess) = 0;

@@ -307,3 +307,57 @@ TEST(Dipoles, PeriodicEqualsEwald)
 }
 
 }    // namespace
+
+namespace {
+
+double ewald_energy(const Dipoles &s, const double L[3])
+{
+  const Field f = ewald_dipoles(s, L);
+  double e = 0;
+  for (std::size_t i = 0; i < s.p.size(); ++i) {
+    e += s.p.q[i] * f.pot[i];
+    for (int d = 0; d < 3; ++d) e += s.mu[3 * i + d] * f.grad[3 * i + d];
+  }
+  return 0.5 * e;
+}
+
+// the periodic virial of charges and dipoles (grid, order 12: the dipoles' virial converges
+// more slowly with the order than their forces): its diagonal is minus the derivative of the
+// Ewald energy under a stretch of one axis (positions scaled, moments fixed)
+TEST(Dipoles, PeriodicVirialIsTheStrainDerivative)
+{
+  for (const double sy : {1.0, 0.5}) {
+    Points pts = uniform_cube(200, 71);
+    const double shape[3] = {1.0, sy, 1.0};
+    for (std::size_t i = 0; i < pts.size(); ++i) pts.xyz[3 * i + 1] *= sy;
+    Dipoles s = random_dipoles(neutral(pts), 72, true);
+    const std::size_t n = s.p.size();
+    kifmm::Options o = periodic_options(12, 32, 1.0, nullptr, sy == 1.0 ? 4 : 6);
+    for (int d = 0; d < 3; ++d) o.root_shape[d] = shape[d];
+    auto ev = kifmm::make_evaluator({}, o);
+    const Field f = fmm(*ev, s);
+    std::vector<double> v(6 * n);
+    kifmm::periodic_dipole_point_virial(*ev, n, s.p.xyz.data(), s.p.q.data(), s.mu.data(), n, s.p.xyz.data(),
+                                        s.p.q.data(), s.mu.data(), f.grad.data(), f.hess.data(), -1.0, v.data());
+    double W[6] = {0, 0, 0, 0, 0, 0};
+    for (std::size_t k = 0; k < n; ++k)
+      for (int m = 0; m < 6; ++m) W[m] += v[6 * k + m];
+    const double L[3] = {2.0, 2.0 * sy, 2.0};
+    const double eps = 1e-5;
+    for (int a = 0; a < 3; ++a) {
+      double de[2];
+      for (int sg : {1, -1}) {
+        Dipoles t = s;
+        double Lt[3] = {L[0], L[1], L[2]};
+        Lt[a] *= 1 + sg * eps;
+        for (std::size_t k = 0; k < n; ++k) t.p.xyz[3 * k + a] *= 1 + sg * eps;
+        de[sg > 0 ? 0 : 1] = ewald_energy(t, Lt);
+      }
+      const double dU = (de[0] - de[1]) / (2 * eps);
+      std::printf("shape y %.1f: W_%d%d %.10f, -dU/de %.10f\n", sy, a, a, W[a], -dU);
+      EXPECT_NEAR(W[a], -dU, 1e-8 * (std::fabs(W[0]) + std::fabs(W[1]) + std::fabs(W[2]))) << "axis " << a;
+    }
+  }
+}
+
+}    // namespace

@@ -91,6 +91,9 @@ template <class K> class FmmEvaluator : public Evaluator {
   void set_root_box(const double center[3], const double half_widths[3]) override;
   void periodic_virial_fields(Communicator *comm, std::size_t n, const double *xyz, const double *q, double *offset,
                               double *psi) override;
+  void periodic_dipole_virial_fields(std::size_t n_src, const double *src_xyz, const double *src_q,
+                                     const double *src_mu, std::size_t n_trg, const double *trg_xyz,
+                                     double *src_offset, double *trg_offset, double *psi, double *chi) override;
 
   // Internals of the last evaluation (tests).
   const Octree &tree() const { return tree_; }
@@ -123,7 +126,14 @@ template <class K> class FmmEvaluator : public Evaluator {
   // sorted) and the targets' second derivatives (th_[0..5] = xx yy zz xy xz yz when hess_)
   const double *dip_mu_ = nullptr;
   bool hess_ = false;
-  std::vector<double> smx_, smy_, smz_, th_[6];
+  std::vector<double> smx_, smy_, smz_, th_[6], dip_kmu_;
+  struct DipoleMode {    // the dipole spans for one call only (also when a pass throws)
+    FmmEvaluator &e;
+    ~DipoleMode() { e.dip_mu_ = nullptr, e.hess_ = false; }
+  };
+  // evaluate_dipoles without resetting the dipole spans (they stay for a virial field)
+  void dipole_evaluation(std::size_t n_src, const double *src_xyz, const double *src_q, const double *src_mu,
+                         std::size_t n_trg, const double *trg_xyz, double *pot, double *grad, double *hess);
   std::vector<double> up_equiv_, dn_check_, dn_equiv_, xhat_, yhat_;
   std::vector<char> has_local_;
   std::vector<char> up_mask_;    // distributed: cells whose upward density is computed (empty = all)
@@ -287,7 +297,10 @@ template <class K> class FmmEvaluator : public Evaluator {
   void grid_p2m(const GridGeometry &g);
   void grid_m2l(const GridGeometry &g, const std::vector<double> &occupied, const GridKernel &gk, double s);
   // periodic virial (periodic_grid_virial_core.h): the offset-weighted field after an evaluation
-  void grid_offset_field(Communicator *comm, double *psi_sorted);
+  // (chi_sorted not null: with the second derivatives of the weighted potential, dipole mode)
+  void grid_offset_field(Communicator *comm, double *psi_sorted, double *chi_sorted = nullptr);
+  void grid_offsets(std::size_t n, const double *xyz, double *offset) const;    // from the cells' centres
+  void check_virial_grid() const;
   void grid_l2p(const GridGeometry &g, bool want_pot);
   std::size_t grid_near_mutual(const GridGeometry &g, bool want_pot);
   std::size_t grid_near_one_sided(const GridGeometry &g, bool want_pot);
@@ -844,6 +857,15 @@ void FmmEvaluator<K>::evaluate_dipoles(std::size_t n_src, const double *src_xyz,
                                        const double *src_mu, std::size_t n_trg, const double *trg_xyz, double *pot,
                                        double *grad, double *hess)
 {
+  DipoleMode mode{*this};
+  dipole_evaluation(n_src, src_xyz, src_q, src_mu, n_trg, trg_xyz, pot, grad, hess);
+}
+
+template <class K>
+void FmmEvaluator<K>::dipole_evaluation(std::size_t n_src, const double *src_xyz, const double *src_q,
+                                        const double *src_mu, std::size_t n_trg, const double *trg_xyz, double *pot,
+                                        double *grad, double *hess)
+{
   if (!has_derivs3<K>::value) throw std::invalid_argument("kifmm: this kernel has no third derivatives: no dipoles");
   stats_ = Stats{};
   stats_.n_targets = n_trg;
@@ -852,7 +874,8 @@ void FmmEvaluator<K>::evaluate_dipoles(std::size_t n_src, const double *src_xyz,
   if (hess) std::fill(hess, hess + 6 * n_trg, 0.0);
   if (n_trg == 0 || (!pot && !grad && !hess)) return;
   const double t = omp_get_wtime();
-  std::vector<double> kxyz, kq, kmu;    // sources with a charge or a dipole
+  std::vector<double> kxyz, kq, &kmu = dip_kmu_;    // sources with a charge or a dipole
+  kmu.clear();
   for (std::size_t j = 0; j < n_src; ++j) {
     const double q = src_q ? src_q[j] : 0.0;
     const double *m = src_mu ? src_mu + 3 * j : nullptr;
@@ -864,10 +887,6 @@ void FmmEvaluator<K>::evaluate_dipoles(std::size_t n_src, const double *src_xyz,
   const std::size_t ns = kq.size();
   stats_.n_sources = ns;
   if (ns == 0) return;
-  struct Mode {    // the dipole spans for this call only (also when a pass throws)
-    FmmEvaluator &e;
-    ~Mode() { e.dip_mu_ = nullptr, e.hess_ = false; }
-  } mode{*this};
   dip_mu_ = src_mu ? kmu.data() : nullptr;
   hess_ = hess != nullptr;
   std::vector<double> g;

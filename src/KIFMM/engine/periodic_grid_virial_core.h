@@ -26,16 +26,17 @@
 
 namespace kifmm {
 
-template <class K>
-void FmmEvaluator<K>::periodic_virial_fields(Communicator *comm, std::size_t n, const double *xyz, const double *q,
-                                             double *offset, double *psi)
+template <class K> void FmmEvaluator<K>::check_virial_grid() const
 {
   if (!std::is_same_v<K, LaplaceKernel> || !grid_ || opt_.periodic_dims != 3)
     throw std::invalid_argument(
         "kifmm: the periodic virial is computed for the Laplace kernel on the single-level grid "
         "(Options::periodic_grid > 0) with three periodic dimensions");
-  const bool dist = comm && comm->size() > 1;
-  // offsets from the cells' centres (wrapped coordinates)
+}
+
+// offsets from the cells' centres (wrapped coordinates)
+template <class K> void FmmEvaluator<K>::grid_offsets(std::size_t n, const double *xyz, double *offset) const
+{
   std::vector<double> wrapped;
   wrap_into_cell(n, xyz, opt_.root_center, opt_.root_half_width, wrapped, opt_.root_shape);
   const GridGeometry g = grid_geometry();
@@ -44,6 +45,38 @@ void FmmEvaluator<K>::periodic_virial_fields(Communicator *comm, std::size_t n, 
     grid_center(g, grid_cell_of(&wrapped[3 * i]), c);
     for (int d = 0; d < 3; ++d) offset[3 * i + d] = wrapped[3 * i + d] - c[d];
   }
+}
+
+template <class K>
+void FmmEvaluator<K>::periodic_dipole_virial_fields(std::size_t n_src, const double *src_xyz, const double *src_q,
+                                                    const double *src_mu, std::size_t n_trg, const double *trg_xyz,
+                                                    double *src_offset, double *trg_offset, double *psi, double *chi)
+{
+  check_virial_grid();
+  grid_offsets(n_src, src_xyz, src_offset);
+  grid_offsets(n_trg, trg_xyz, trg_offset);
+  std::fill(psi, psi + 9 * n_trg, 0.0);
+  std::fill(chi, chi + 18 * n_trg, 0.0);
+  if (n_trg == 0) return;
+  DipoleMode mode{*this};
+  std::vector<double> grad(3 * n_trg), hess(6 * n_trg);
+  dipole_evaluation(n_src, src_xyz, src_q, src_mu, n_trg, trg_xyz, nullptr, grad.data(), hess.data());
+  if (stats_.n_sources == 0) return;
+  std::vector<double> ps(9 * tx_.size(), 0.0), ch(18 * tx_.size(), 0.0);
+  grid_offset_field(nullptr, ps.data(), ch.data());
+  for (std::size_t i = 0; i < tx_.size(); ++i) {
+    std::copy(&ps[9 * i], &ps[9 * i + 9], psi + 9 * tree_.trg_order[i]);
+    std::copy(&ch[18 * i], &ch[18 * i + 18], chi + 18 * tree_.trg_order[i]);
+  }
+}
+
+template <class K>
+void FmmEvaluator<K>::periodic_virial_fields(Communicator *comm, std::size_t n, const double *xyz, const double *q,
+                                             double *offset, double *psi)
+{
+  check_virial_grid();
+  const bool dist = comm && comm->size() > 1;
+  grid_offsets(n, xyz, offset);
   std::fill(psi, psi + 9 * n, 0.0);
   std::vector<double> grad(3 * n);
   if (dist) evaluate_distributed(*comm, n, xyz, q, nullptr, grad.data());
@@ -55,7 +88,7 @@ void FmmEvaluator<K>::periodic_virial_fields(Communicator *comm, std::size_t n, 
   for (std::size_t i = 0; i < tx_.size(); ++i) std::copy(&ps[9 * i], &ps[9 * i + 9], psi + 9 * tree_.trg_order[i]);
 }
 
-template <class K> void FmmEvaluator<K>::grid_offset_field(Communicator *comm, double *psi)
+template <class K> void FmmEvaluator<K>::grid_offset_field(Communicator *comm, double *psi, double *chi)
 {
   if constexpr (std::is_same_v<K, LaplaceKernel>) {
     const GridGeometry g = grid_geometry();
@@ -72,18 +105,21 @@ template <class K> void FmmEvaluator<K>::grid_offset_field(Communicator *comm, d
       std::fill(tgx_.begin(), tgx_.end(), 0.0);
       std::fill(tgy_.begin(), tgy_.end(), 0.0);
       std::fill(tgz_.begin(), tgz_.end(), 0.0);
+      for (auto &h : th_) std::fill(h.begin(), h.end(), 0.0);
       grid_m2l(g, occupied, *mk->a[a], 1.0);
       grid_l2p(g, false);
       for (std::size_t i = 0; i < nt; ++i) {
         psi[9 * i + 3 * a] += tgx_[i];
         psi[9 * i + 3 * a + 1] += tgy_[i];
         psi[9 * i + 3 * a + 2] += tgz_[i];
+        if (chi)
+          for (int m = 0; m < 6; ++m) chi[18 * i + 6 * a + m] += th_[m][i];
       }
     }
     // ---- near part: the gradient of each neighbour cell's sources times the centres' offset
 #pragma omp parallel
     {
-      std::vector<double> x, y, z, gx, gy, gz;
+      std::vector<double> x, y, z, gx, gy, gz, h[6];
 #pragma omp for schedule(dynamic, 1)
       for (int b = 0; b < kc; ++b) {
         const std::size_t t = tb[b], m = tb[b + 1] - tb[b];
@@ -98,8 +134,13 @@ template <class K> void FmmEvaluator<K>::grid_offset_field(Communicator *comm, d
           gx.assign(m, 0.0);
           gy.assign(m, 0.0);
           gz.assign(m, 0.0);
-          p2p_pg<K, false>(k_, false, {m, x.data(), y.data(), z.data()}, source_range(sb[s], sb[s + 1] - sb[s]),
-                           ResultSpan{nullptr, gx.data(), gy.data(), gz.data()});
+          ResultSpan res{nullptr, gx.data(), gy.data(), gz.data()};
+          if (chi) {
+            for (auto &v : h) v.assign(m, 0.0);
+            res = {nullptr,     gx.data(),   gy.data(),   gz.data(),   h[0].data(),
+                   h[1].data(), h[2].data(), h[3].data(), h[4].data(), h[5].data()};
+          }
+          p2p_pg<K, false>(k_, false, {m, x.data(), y.data(), z.data()}, source_range(sb[s], sb[s + 1] - sb[s]), res);
           const double D[3] = {-dx * g.w[0], -dy * g.w[1], -dz * g.w[2]};
           for (std::size_t i = 0; i < m; ++i)
             for (int a = 0; a < 3; ++a) {
@@ -107,12 +148,15 @@ template <class K> void FmmEvaluator<K>::grid_offset_field(Communicator *comm, d
               pa[0] += D[a] * gx[i];
               pa[1] += D[a] * gy[i];
               pa[2] += D[a] * gz[i];
+              if (chi)
+                for (int c = 0; c < 6; ++c) chi[18 * (t + i) + 6 * a + c] += D[a] * h[c][i];
             }
         }
       }
     }
     // ---- background: d_b of sum_j q_j N_a(u - w_j), N_a(z) = -(2 pi / 5 V) z_a |z|^2
-    double mom[13] = {0};    // Q, M1[3], M2[9]
+    // dipoles: minus mu . grad_z of the charge terms, from P = sum mu and R_ab = sum mu_a w_b
+    double mom[25] = {0};    // Q, M1[3], M2[9], P[3], R[9]
     for (int b = 0; b < kc; ++b) {
       double c[3];
       grid_center(g, b, c);
@@ -123,12 +167,21 @@ template <class K> void FmmEvaluator<K>::grid_offset_field(Communicator *comm, d
           mom[1 + a] += s * w[a];
           for (int e = 0; e < 3; ++e) mom[4 + 3 * a + e] += s * w[a] * w[e];
         }
+        if (dip_mu_) {
+          const double mu[3] = {smx_[j], smy_[j], smz_[j]};
+          for (int a = 0; a < 3; ++a) {
+            mom[13 + a] += mu[a];
+            for (int e = 0; e < 3; ++e) mom[16 + 3 * a + e] += mu[a] * w[e];
+          }
+        }
       }
     }
-    grid_reduce(comm, mom, 13);
+    grid_reduce(comm, mom, 25);
     constexpr double pi = 3.14159265358979323846;
     const double V = g.L[0] * g.L[1] * g.L[2], cN = -2.0 * pi / (5.0 * V);
     const double Q = mom[0], *M1 = mom + 1, *M2 = mom + 4, trM2 = M2[0] + M2[4] + M2[8];
+    const double *P = mom + 13, *R = mom + 16, trR = R[0] + R[4] + R[8];
+    const int ia[6] = {0, 1, 2, 0, 0, 1}, ib[6] = {0, 1, 2, 1, 2, 2};
 #pragma omp parallel for schedule(static)
     for (int b = 0; b < kc; ++b) {
       double c[3];
@@ -137,11 +190,23 @@ template <class K> void FmmEvaluator<K>::grid_offset_field(Communicator *comm, d
         const double u[3] = {tx_[i] - c[0], ty_[i] - c[1], tz_[i] - c[2]};
         const double S = Q * (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) -
             2 * (u[0] * M1[0] + u[1] * M1[1] + u[2] * M1[2]) + trM2;
+        const double Pu = P[0] * u[0] + P[1] * u[1] + P[2] * u[2];
         for (int a = 0; a < 3; ++a)
           for (int e = 0; e < 3; ++e) {
             const double T = Q * u[a] * u[e] - u[a] * M1[e] - M1[a] * u[e] + M2[3 * a + e];
-            psi[9 * (std::size_t) i + 3 * a + e] += cN * ((a == e ? S : 0.0) + 2 * T);
+            // dipoles: -2 cN [P_a u_e - R_ae + P_e u_a - R_ea + delta_ae (P.u - tr R)]
+            const double Dp = P[a] * u[e] - R[3 * a + e] + P[e] * u[a] - R[3 * e + a] + (a == e ? Pu - trR : 0.0);
+            psi[9 * (std::size_t) i + 3 * a + e] += cN * ((a == e ? S : 0.0) + 2 * T - 2 * Dp);
           }
+        if (chi)    // second derivatives: 2 cN [delta_ab z_e + delta_ae z_b + delta_be z_a] summed, minus dipoles
+          for (int a = 0; a < 3; ++a)
+            for (int m = 0; m < 6; ++m) {
+              const int b2 = ia[m], e = ib[m];
+              const double zc[3] = {Q * u[0] - M1[0], Q * u[1] - M1[1], Q * u[2] - M1[2]};
+              double v = (a == b2 ? zc[e] : 0.0) + (a == e ? zc[b2] : 0.0) + (b2 == e ? zc[a] : 0.0);
+              v -= (b2 == e ? P[a] : 0.0) + (a == b2 ? P[e] : 0.0) + (a == e ? P[b2] : 0.0);
+              chi[18 * (std::size_t) i + 6 * a + m] += 2 * cN * v;
+            }
       }
     }
   } else {

@@ -131,6 +131,15 @@ class Evaluator {
   // near part from the 26 neighbour cells. One evaluation with q, then that field.
   virtual void periodic_virial_fields(Communicator *comm, std::size_t n, const double *xyz, const double *q,
                                       double *offset, double *psi) = 0;
+  // The same with charges and dipoles (one process; sources and targets may differ, e.g. all
+  // points as sources and a rank's own as targets): offsets of the sources and of the targets,
+  // psi (9 per target) of the sources' charges and dipoles, and its derivatives
+  //   chi[18i + 6a + m] = the second derivatives of sum_{j, n} (D_n)_a Phi_{j,n} at x_i
+  // (m = xx yy zz xy xz yz), Phi_{j,n} the potential of source j's image n (charge and dipole).
+  virtual void periodic_dipole_virial_fields(std::size_t n_src, const double *src_xyz, const double *src_q,
+                                             const double *src_mu, std::size_t n_trg, const double *trg_xyz,
+                                             double *src_offset, double *trg_offset, double *psi,
+                                             double *chi) = 0;
 };
 
 std::unique_ptr<Evaluator> make_evaluator(const KernelSpec &kernel, const Options &options);
@@ -358,6 +367,17 @@ void point_virial(Evaluator &ev, Communicator *comm, std::size_t n, const double
 void periodic_point_virial(Evaluator &ev, Communicator *comm, std::size_t n, const double *xyz,
                            const double *q, const double *grad, double prefactor, double *virial,
                            double *offset = nullptr);
+
+// The same for charges and dipoles (one process; sources all points, targets a subset or all):
+// virial[6k + m] = prefactor / 2 sum_{j, n} (r_n)_a F_b (ab = xx yy zz xy xz yz; r_n = x_k - y_j - n L,
+// F = (q_k d + mu_k . grad d) d_b of the potential of image n of j), from the evaluation's grad and
+// hess at the targets, periodic_dipole_virial_fields and three dipole evaluations of the
+// sources' strengths times their offsets. Not symmetric: the torques make xy differ from yx; xy is
+// r_x F_y as LAMMPS's pair styles tally it.
+void periodic_dipole_point_virial(Evaluator &ev, std::size_t n_src, const double *src_xyz, const double *src_q,
+                                  const double *src_mu, std::size_t n_trg, const double *trg_xyz,
+                                  const double *trg_q, const double *trg_mu, const double *grad,
+                                  const double *hess, double prefactor, double *virial);
 
 // Sampled error check. exact_gradient: the exact gradient at n_trg targets of the sources
 // (open: direct_sum; the evaluator's periodic cell: the Ewald sum of periodic.h); with comm,

@@ -551,19 +551,18 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   // reduction over ranks), as in the KSPACE styles
   if (eflag_global || keep) MPI_Allreduce(&e_local, &energy, 1, MPI_DOUBLE, MPI_SUM, world);
   if (vflag_global || keep) MPI_Allreduce(v_local, virial, 6, MPI_DOUBLE, MPI_SUM, world);
-  const bool tensor = periodic_tensor();
-  if (periodic && !tensor && (vflag_global || keep)) periodic_virial(e_local);
-  if (vflag_atom && periodic && !tensor)
+  const bool tensor = periodic_tensor() && !dipoles;
+  if (dipoles && (periodic || vflag_atom) && (vflag_global || keep || vflag_atom))
+    dipole_virial(cf, periodic && (vflag_global || keep), vflag_atom);    // kspace_kifmm_dipoles.cpp
+  if (periodic && !tensor && !dipoles && (vflag_global || keep)) periodic_virial(e_local);
+  if (vflag_atom && periodic && !tensor && !dipoles)
     error->all(FLERR, "kspace_style kifmm: per-atom virial (compute stress/atom) with periodic boundaries "
                "needs boundary p p p, kernel coulomb or gravity and 'kspace_modify pressure/scalar no' "
                "(the default there)");
   if (tensor && (vflag_global || keep || vflag_atom)) periodic_tensor_virial(cf, vflag_global || keep, vflag_atom);
   if (action == Stride::Evaluate) schedule->end_evaluation(energy, virial);
 
-  if (vflag_atom && dipoles)
-    error->all(FLERR, "kspace_style kifmm: per-atom virial (compute stress/atom) with point dipoles is not "
-               "available in this version");
-  if (vflag_atom && !periodic && nsrc > 0) {
+  if (vflag_atom && !periodic && !dipoles && nsrc > 0) {
     double center[3] = {0, 0, 0};
     per_atom_virial(cf, center);
   }

@@ -70,6 +70,7 @@ class KSpaceKIFMM : public KSpace {
   // force and torque of point k (torque zero without dipoles), its energy
   void point_force(std::size_t k, double prefactor, double f[3], double t[3]) const;
   double point_energy(std::size_t k, double prefactor) const;
+  void dipole_virial(double prefactor, bool global, bool peratom);
   // more than one rank: distributed evaluation over this communicator (world), open or
   // periodic boundaries; one rank uses the serial evaluate() (with its mutual near field)
   std::unique_ptr<kifmm::Communicator> kcomm;

@@ -5,13 +5,15 @@
 //   F_i   = -qqrd2e (q_i g_i + h_i mu_i)        (q E + (mu . grad) E)
 //   tau_i = -qqrd2e mu_i x g_i                  (mu x E)
 //   U     = qqrd2e / 2 sum_i (q_i phi_i + mu_i . g_i)
-// as pair lj/cut/dipole/cut sums them with a cutoff. Open boundaries; on several ranks every
-// rank evaluates its own atoms against the sources of all ranks (gathered). The measured error
-// covers forces and torques (sampled against the exact sum).
+// as pair lj/cut/dipole/cut sums them with a cutoff. Open boundaries, and p p p with kernel
+// coulomb (tin-foil, as ewald/disp sums dipoles); on several ranks every rank evaluates its own
+// atoms against the sources of all ranks (gathered). The measured error covers forces and
+// torques (sampled against the exact sum; periodic: an Ewald sum).
 #include "kspace_kifmm.h"
 
 #include "atom.h"
 #include "comm.h"
+#include "domain.h"
 #include "error.h"
 #include "update.h"
 
@@ -52,9 +54,9 @@ void KSpaceKIFMM::dipole_init()
   if (kset.kernel == LongRangeKernel::Gravity)
     error->all(FLERR, "kspace_style kifmm kernel gravity has no dipoles: the atoms have dipole moments (mu); "
                       "use kernel coulomb or yukawa");
-  if (periodic)
-    error->all(FLERR, "kspace_style kifmm: point dipoles (atoms with a dipole moment mu) need open boundaries "
-                      "(boundary f or s in all three directions) in this version");
+  if (periodic && (slab || kset.kernel != LongRangeKernel::Coulomb))
+    error->all(FLERR, "kspace_style kifmm: point dipoles (atoms with a dipole moment mu) with periodic boundaries "
+                      "need boundary p p p and kernel coulomb in this version");
   if (!atom->torque_flag)
     error->all(FLERR, "kspace_style kifmm: atoms with dipole moments need atom attribute torque "
                       "(atom_style hybrid sphere dipole)");
@@ -129,6 +131,42 @@ double KSpaceKIFMM::point_energy(std::size_t k, double ce) const
   return 0.5 * ce * e;
 }
 
+// Virial of charges and dipoles, global (virial[6]) and/or per atom (vatom): 1/2 sum over
+// pairs (and images) of (x_i - x_j)_a F_ij,b (kifmm::dipole_point_virial, periodic:
+// kifmm::periodic_dipole_point_virial on the single-level grid). The torques make it
+// unsymmetric; xy is r_x F_y as pair lj/cut/dipole/cut tallies it.
+void KSpaceKIFMM::dipole_virial(double cf, bool global, bool peratom)
+{
+  const std::size_t n = index.size();
+  std::vector<double> w(6 * n), all_xyz, all_q, all_mu;
+  const double *sx = xyz.data(), *sq = strength.data(), *sm = moment.data();
+  std::size_t ns = n;
+  if (distributed()) {
+    gather_all_dipoles(all_xyz, all_q, all_mu);
+    sx = all_xyz.data(), sq = all_q.data(), sm = all_mu.data(), ns = all_q.size();
+  }
+  if (ns > 0) {
+    if (periodic) {
+      kifmm::periodic_dipole_point_virial(virial_evaluator(), ns, sx, sq, sm, n, xyz.data(), strength.data(),
+                                          moment.data(), grad.data(), hess.data(), cf, w.data());
+    } else {
+      const double center[3] = {0.5 * (domain->boxlo[0] + domain->boxhi[0]), 0.5 * (domain->boxlo[1] + domain->boxhi[1]),
+                                0.5 * (domain->boxlo[2] + domain->boxhi[2])};
+      kifmm::dipole_point_virial(*engine, ns, sx, sq, sm, n, xyz.data(), strength.data(), moment.data(), grad.data(),
+                                 hess.data(), cf, w.data(), center);
+    }
+  }
+  if (global) {
+    double v_local[6] = {0, 0, 0, 0, 0, 0};
+    for (std::size_t k = 0; k < n; ++k)
+      for (int c = 0; c < 6; ++c) v_local[c] += w[6 * k + c];
+    MPI_Allreduce(v_local, virial, 6, MPI_DOUBLE, MPI_SUM, world);
+  }
+  if (peratom)
+    for (std::size_t k = 0; k < n; ++k)
+      for (int c = 0; c < 6; ++c) vatom[index[k]][c] += w[6 * k + c];
+}
+
 // Sampled error of forces and torques against the exact sum over all ranks' points.
 KSpaceKIFMM::MeasuredError KSpaceKIFMM::measure_dipole_error(int nsamples)
 {
@@ -146,8 +184,8 @@ KSpaceKIFMM::MeasuredError KSpaceKIFMM::measure_dipole_error(int nsamples)
   std::vector<double> txyz(3 * m), g(3 * m), h(6 * m);
   for (std::size_t s = 0; s < m; ++s)
     for (int d = 0; d < 3; ++d) txyz[3 * s + d] = xyz[3 * sample[s] + d];
-  kifmm::direct_sum_dipoles(engine->kernel(), all_q.size(), all_xyz.data(), all_q.data(), all_mu.data(), m,
-                            txyz.data(), nullptr, g.data(), h.data());
+  kifmm::exact_dipole_field(*engine, all_q.size(), all_xyz.data(), all_q.data(), all_mu.data(), m, txyz.data(),
+                            g.data(), h.data());
   // sums: force diff2, ref2, all evaluated force2; torque the same
   double sums[6] = {0, 0, 0, 0, 0, 0}, tot[6];
   double f[3], t[3], fe[3], te[3];

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <stdexcept>
 #include <vector>
 
 namespace kifmm {
@@ -96,6 +97,19 @@ void exact_gradient(const Evaluator &ev, Communicator *comm, std::size_t n_src,
   sum(all.size() / 3, all.data(), g.data());
   if (!g.empty()) comm->allreduce_sum(g.data(), g.size());
   std::copy(g.begin() + offset, g.begin() + offset + 3 * n_trg, grad);
+}
+
+void exact_dipole_field(const Evaluator &ev, std::size_t n_src, const double *src_xyz, const double *src_q,
+                        const double *src_mu, std::size_t n_trg, const double *trg_xyz, double *grad, double *hess)
+{
+  const Options &opt = ev.options();
+  if (opt.periodic && (opt.periodic_dims != 3 || ev.kernel().type != KernelType::Laplace))
+    throw std::invalid_argument("kifmm: the exact sum of periodic dipoles is for p p p and the Laplace kernel");
+  if (opt.periodic)
+    periodic_dipole_direct_sum(opt.root_center, opt.root_half_width, opt.root_shape, n_src, src_xyz, src_q, src_mu,
+                               n_trg, trg_xyz, nullptr, grad, hess);
+  else
+    direct_sum_dipoles(ev.kernel(), n_src, src_xyz, src_q, src_mu, n_trg, trg_xyz, nullptr, grad, hess);
 }
 
 std::vector<std::size_t> sample_without_replacement(std::vector<std::size_t> candidates,

@@ -896,6 +896,7 @@ void FmmEvaluator<K>::dipole_evaluation(std::size_t n_src, const double *src_xyz
     gr = g.data();
   }
   const double *sxyz = kxyz.data();
+  const bool same_arrays = src_xyz == trg_xyz && n_src == n_trg && ns == n_src;
   (this->*boundary_.wrap)(ns, sxyz, n_trg, trg_xyz);    // periodic: into the cell (moments unchanged)
   if (grid_) evaluate_grid(ns, sxyz, kq.data(), n_trg, trg_xyz, pot, gr, false);
   else evaluate_tree(t, ns, sxyz, kq.data(), n_trg, trg_xyz, pot, gr);
@@ -906,8 +907,7 @@ void FmmEvaluator<K>::dipole_evaluation(std::size_t n_src, const double *src_xyz
       for (int c = 0; c < 6; ++c) hess[6 * j + c] = th_[c][i];
     }
   }
-  if (src_xyz == trg_xyz && n_src == n_trg && ns == n_src && stats_.coincident_pairs >= ns)
-    stats_.coincident_pairs -= ns;
+  if (same_arrays && stats_.coincident_pairs >= ns) stats_.coincident_pairs -= ns;    // self pairs
 }
 
 // ---- open boundaries

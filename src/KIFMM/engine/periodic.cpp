@@ -2,6 +2,7 @@
 #include "periodic.h"
 
 #include "ewald_split.h"
+#include "p2p_dipole.h"
 #include "surface.h"
 
 #include <algorithm>
@@ -356,6 +357,105 @@ void periodic_direct_sum(const KernelSpec &kernel, const double center[3], doubl
     if (pot) pot[i] = v / h;
     if (grad)
       for (int d = 0; d < 3; ++d) grad[3 * i + d] = g[d] / (h * h);
+  }
+}
+
+namespace {
+// erfc(alpha r)/r with its derivatives (kernels.h's derivs3 convention): the real-space terms
+struct ErfcKernel {
+  double alpha;
+  void derivs3(double r2, double invr, double &G, double &F, double &H, double &T) const
+  {
+    const double r = r2 * invr, i2 = invr * invr, c = 2.0 * alpha / kSqrtPi * std::exp(-alpha * alpha * r2);
+    const double a2 = 2.0 * alpha * alpha;
+    const double b0 = std::erfc(alpha * r) * invr, b1 = (b0 + c) * i2, b2 = (3 * b1 + a2 * c) * i2,
+                 b3 = (5 * b2 + a2 * a2 * c) * i2;
+    G = b0, F = -b1, H = b2, T = -b3;
+  }
+};
+}    // namespace
+
+void periodic_dipole_direct_sum(const double center[3], double h, const double *shape, std::size_t n_src,
+                                const double *src_xyz, const double *src_q, const double *src_mu, std::size_t n_trg,
+                                const double *trg_xyz, double *pot, double *grad, double *hess)
+{
+  const Split s(KernelSpec{}, shape);
+  const Reciprocal rc(s);
+  std::vector<double> su, tu;
+  wrap_into_cell(n_src, src_xyz, center, h, su, shape);
+  wrap_into_cell(n_trg, trg_xyz, center, h, tu, shape);
+  // unit coordinates: positions (x - c) / h, dipoles mu / h
+  std::vector<double> sx(n_src), sy(n_src), sz(n_src), sq(n_src), mx(n_src), my(n_src), mz(n_src);
+  double qtot = 0;
+  for (std::size_t j = 0; j < n_src; ++j) {
+    sx[j] = (su[3 * j] - center[0]) / h, sy[j] = (su[3 * j + 1] - center[1]) / h, sz[j] = (su[3 * j + 2] - center[2]) / h;
+    sq[j] = src_q ? src_q[j] : 0.0;
+    mx[j] = src_mu ? src_mu[3 * j] / h : 0.0, my[j] = src_mu ? src_mu[3 * j + 1] / h : 0.0;
+    mz[j] = src_mu ? src_mu[3 * j + 2] / h : 0.0;
+    qtot += sq[j];
+  }
+  // structure factors S(m) = sum_j (q_j + i k.mu_j) exp(i k.y_j)
+  const std::size_t nk = rc.m.size();
+  std::vector<std::complex<double>> S(nk, 0.0);
+  {
+    std::vector<std::complex<double>> e[3];
+    for (std::size_t j = 0; j < n_src; ++j) {
+      const double v[3] = {sx[j], sy[j], sz[j]};
+      rc.phases(s, v, e);
+      for (std::size_t q = 0; q < nk; ++q) {
+        const double km = kPi * (rc.m[q][0] * mx[j] / s.shape[0] + rc.m[q][1] * my[j] / s.shape[1] +
+                                 rc.m[q][2] * mz[j] / s.shape[2]);
+        S[q] += std::complex<double>(sq[j], km) * rc.phase(e, q);
+      }
+    }
+  }
+  const ErfcKernel ek{s.alpha};
+  const double bg = s.background(), cut = s.real_cut();
+  const double c1 = 2 * s.alpha / kSqrtPi, c3 = 4 * s.alpha * s.alpha * s.alpha / (3 * kSqrtPi);
+  const int ia[6] = {0, 1, 2, 0, 0, 1}, ib[6] = {0, 1, 2, 1, 2, 2};
+#pragma omp parallel for schedule(dynamic, 4)
+  for (std::size_t i = 0; i < n_trg; ++i) {
+    const double u[3] = {(tu[3 * i] - center[0]) / h, (tu[3 * i + 1] - center[1]) / h, (tu[3 * i + 2] - center[2]) / h};
+    double v = bg * qtot, g[3] = {0, 0, 0}, hh[6] = {0, 0, 0, 0, 0, 0};
+    // real space: the images of every source within the cutoff (the same point at n = 0 left out)
+    for (std::size_t j = 0; j < n_src; ++j) {
+      double r[3] = {u[0] - sx[j], u[1] - sy[j], u[2] - sz[j]};
+      for (int d = 0; d < 3; ++d) r[d] -= s.period[d] * std::nearbyint(r[d] / s.period[d]);
+      const bool same = r[0] == 0.0 && r[1] == 0.0 && r[2] == 0.0;
+      const int N[3] = {s.images(0, std::fabs(r[0])), s.images(1, std::fabs(r[1])), s.images(2, std::fabs(r[2]))};
+      for (int nx = -N[0]; nx <= N[0]; ++nx)
+        for (int ny = -N[1]; ny <= N[1]; ++ny)
+          for (int nz = -N[2]; nz <= N[2]; ++nz) {
+            const double d[3] = {r[0] + s.period[0] * nx, r[1] + s.period[1] * ny, r[2] + s.period[2] * nz};
+            const double r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            if (r2 == 0.0 || r2 > cut * cut) continue;
+            const double tx = d[0], ty = d[1], tz = d[2], zx = 0, zy = 0, zz = 0;
+            const PointSpan t{1, &tx, &ty, &tz}, src{1, &zx, &zy, &zz, &sq[j], &mx[j], &my[j], &mz[j]};
+            p2p_dipole<ErfcKernel, true, true, false>(
+                ek, t, src, {&v, &g[0], &g[1], &g[2], &hh[0], &hh[1], &hh[2], &hh[3], &hh[4], &hh[5]}, nullptr);
+          }
+      if (same) {    // the reciprocal sum's part of the point itself
+        v -= c1 * sq[j];
+        g[0] -= c3 * mx[j], g[1] -= c3 * my[j], g[2] -= c3 * mz[j];
+        for (int d = 0; d < 3; ++d) hh[d] += c3 * sq[j];
+      }
+    }
+    if (nk > 0) {
+      std::vector<std::complex<double>> e[3];
+      rc.phases(s, u, e);
+      for (std::size_t q = 0; q < nk; ++q) {
+        const std::complex<double> ph = rc.phase(e, q) * std::conj(S[q]);
+        const double k[3] = {kPi * rc.m[q][0] / s.shape[0], kPi * rc.m[q][1] / s.shape[1], kPi * rc.m[q][2] / s.shape[2]};
+        v += rc.w[q] * ph.real();
+        for (int d = 0; d < 3; ++d) g[d] -= rc.w[q] * k[d] * ph.imag();
+        for (int m = 0; m < 6; ++m) hh[m] -= rc.w[q] * k[ia[m]] * k[ib[m]] * ph.real();
+      }
+    }
+    if (pot) pot[i] = v / h;
+    if (grad)
+      for (int d = 0; d < 3; ++d) grad[3 * i + d] = g[d] / (h * h);
+    if (hess)
+      for (int m = 0; m < 6; ++m) hess[6 * i + m] = hh[m] / (h * h * h);
   }
 }
 

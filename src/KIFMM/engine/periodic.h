@@ -95,6 +95,13 @@ struct LatticeTable {
 std::shared_ptr<const LatticeTable> lattice_table(const KernelSpec &unit_kernel, int p,
                                                   const double *shape = nullptr);
 
+// The same for charges and dipoles (Laplace, p p p; conventions of evaluate_dipoles; a pair at
+// r = 0 skips the bare n = 0 term only), with the second derivatives (hess: 6 per target; pot,
+// grad, hess may be null).
+void periodic_dipole_direct_sum(const double center[3], double half_width, const double *shape, std::size_t n_src,
+                                const double *src_xyz, const double *src_q, const double *src_mu, std::size_t n_trg,
+                                const double *trg_xyz, double *pot, double *grad, double *hess);
+
 // Periodic Green's function of the unit cell (period 2; shape: periods 2 shape[d]) and its
 // gradient, r in unit coordinates; `regular` subtracts the bare kernel of the n = 0 term (finite at r = 0).
 // Laplace includes the background constant. For tests and the reference sum.

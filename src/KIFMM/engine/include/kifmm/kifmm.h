@@ -368,7 +368,17 @@ void periodic_point_virial(Evaluator &ev, Communicator *comm, std::size_t n, con
                            const double *q, const double *grad, double prefactor, double *virial,
                            double *offset = nullptr);
 
-// The same for charges and dipoles (one process; sources all points, targets a subset or all):
+// Charges and dipoles, open boundaries (dipole_virial.cpp; one process; sources all points,
+// targets a subset or all): virial[6k + m] = prefactor / 2 sum_j (x_k - y_j)_a F_b (F = (q_k d +
+// mu_k . grad d) d_b of the potential of j; ab = xx yy zz xy xz yz, xy = r_x F_y as LAMMPS's pair
+// styles tally it), from the evaluation's grad and hess at the targets and three dipole
+// evaluations of the sources' strengths times their offsets from center (any point; near the
+// points for round-off).
+void dipole_point_virial(Evaluator &ev, std::size_t n_src, const double *src_xyz, const double *src_q,
+                         const double *src_mu, std::size_t n_trg, const double *trg_xyz, const double *trg_q,
+                         const double *trg_mu, const double *grad, const double *hess, double prefactor,
+                         double *virial, const double center[3]);
+// The same periodic (p p p, Laplace, on the grid; dipole_virial.cpp):
 // virial[6k + m] = prefactor / 2 sum_{j, n} (r_n)_a F_b (ab = xx yy zz xy xz yz; r_n = x_k - y_j - n L,
 // F = (q_k d + mu_k . grad d) d_b of the potential of image n of j), from the evaluation's grad and
 // hess at the targets, periodic_dipole_virial_fields and three dipole evaluations of the
@@ -386,6 +396,10 @@ void periodic_dipole_point_virial(Evaluator &ev, std::size_t n_src, const double
 void exact_gradient(const Evaluator &ev, Communicator *comm, std::size_t n_src,
                     const double *src_xyz, const double *src_q, std::size_t n_trg,
                     const double *trg_xyz, double *grad);
+// The same for charges and dipoles (one process): the exact gradient and second derivatives
+// at the targets (open: direct_sum_dipoles; p p p: an Ewald sum with the engine's conventions).
+void exact_dipole_field(const Evaluator &ev, std::size_t n_src, const double *src_xyz, const double *src_q,
+                        const double *src_mu, std::size_t n_trg, const double *trg_xyz, double *grad, double *hess);
 // `want` of the candidates at random, without replacement (all when want >= their number).
 std::vector<std::size_t> sample_without_replacement(std::vector<std::size_t> candidates,
                                                     std::size_t want, unsigned long long seed);

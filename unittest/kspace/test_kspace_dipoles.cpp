@@ -282,13 +282,22 @@ TEST_F(KSpaceDipoleErrors, GravityHasNoDipoles)
   EXPECT_LAMMPS_ERROR(command("run 0"), "kernel gravity has no dipoles");
 }
 
-TEST_F(KSpaceDipoleErrors, PeriodicBoundariesNeedOpenOnes)
+TEST_F(KSpaceDipoleErrors, SlabIsAnError)
+{
+  commands("units lj\natom_style hybrid sphere dipole\nboundary p p f\nregion box block 0 4 0 4 0 4\n"
+           "create_box 1 box\ncreate_atoms 1 single 1 1 1\ncreate_atoms 1 single 3 3 3\n"
+           "set atom 1 charge 1.0\nset atom 2 charge -1.0\nset atom 1 dipole 0 0 1\n"
+           "pair_style zero 1.0\npair_coeff * *\nkspace_style kifmm 1e-4");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "point dipoles .* with periodic boundaries need boundary p p p and kernel coulomb");
+}
+
+TEST_F(KSpaceDipoleErrors, ScreenedKernelInAPeriodicBoxIsAnError)
 {
   commands("units lj\natom_style hybrid sphere dipole\nboundary p p p\nregion box block 0 4 0 4 0 4\n"
            "create_box 1 box\ncreate_atoms 1 single 1 1 1\ncreate_atoms 1 single 3 3 3\n"
            "set atom 1 charge 1.0\nset atom 2 charge -1.0\nset atom 1 dipole 0 0 1\n"
-           "pair_style zero 1.0\npair_coeff * *\nkspace_style kifmm 1e-4");
-  EXPECT_LAMMPS_ERROR(command("run 0"), "point dipoles .* need open boundaries");
+           "pair_style zero 1.0\npair_coeff * *\nkspace_style kifmm 1e-4\nkspace_modify kifmm kernel yukawa 1.0");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "point dipoles .* with periodic boundaries need boundary p p p and kernel coulomb");
 }
 
 TEST_F(KSpaceDipoleErrors, AtomStyleWithoutTorqueIsAnError)

@@ -201,10 +201,8 @@ template <class K> class FmmEvaluator : public Evaluator {
   void evaluate_tree(double t0, std::size_t ns, const double *sxyz, const double *sq, std::size_t n_trg,
                      const double *trg_xyz, double *pot, double *grad);
   // the sorted sources are the sorted targets (same points, same order)
-  // (not with dipoles: their near field is one-sided, p2p_mutual has no dipole loop)
   bool same_sorted_points() const
   {
-    if (dip_mu_ || hess_) return false;
     return sx_.size() == tx_.size() && tree_.src_order == tree_.trg_order && sx_ == tx_ && sy_ == ty_ && sz_ == tz_;
   }
   // mutual near field (sources = targets): open boundaries use mutual_, periodic plists_
@@ -898,7 +896,7 @@ void FmmEvaluator<K>::dipole_evaluation(std::size_t n_src, const double *src_xyz
   const double *sxyz = kxyz.data();
   const bool same_arrays = src_xyz == trg_xyz && n_src == n_trg && ns == n_src;
   (this->*boundary_.wrap)(ns, sxyz, n_trg, trg_xyz);    // periodic: into the cell (moments unchanged)
-  if (grid_) evaluate_grid(ns, sxyz, kq.data(), n_trg, trg_xyz, pot, gr, false);
+  if (grid_) evaluate_grid(ns, sxyz, kq.data(), n_trg, trg_xyz, pot, gr, same_arrays);
   else evaluate_tree(t, ns, sxyz, kq.data(), n_trg, trg_xyz, pot, gr);
   if (hess) {
 #pragma omp parallel for schedule(static)

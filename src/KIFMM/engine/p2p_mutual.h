@@ -148,6 +148,10 @@ template <class K, bool POT>
 inline void p2p_mutual(const K &k, bool self, const MutualSpan &A, const MutualSpan &B, const double sh[3],
                        std::size_t *n_zero)
 {
+  if (A.pts.mx || A.acc.hxx) {    // dipoles or second derivatives (p2p_dipole.h)
+    p2p_dipole_mutual<K, POT>(k, self, A.pts, A.acc, B.pts, B.acc, sh, n_zero);
+    return;
+  }
 #if defined(__AVX512F__)
   if constexpr (std::is_same_v<K, LaplaceKernel>) {
     if (self) {    // the leaf with itself: the one-sided loop over all pairs costs the same

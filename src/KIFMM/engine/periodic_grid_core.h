@@ -234,8 +234,7 @@ void FmmEvaluator<K>::grid_passes(Communicator *comm, std::size_t own_sources, b
     grid_l2p(g, want_pot);
     const double t5 = omp_get_wtime();
     stats_.t_downward = t5 - t4;
-    stats_.coincident_pairs =
-        same_points && !dip_mu_ && !hess_ ? grid_near_mutual(g, want_pot) : grid_near_one_sided(g, want_pot);
+    stats_.coincident_pairs = same_points ? grid_near_mutual(g, want_pot) : grid_near_one_sided(g, want_pot);
     stats_.t_p2p = omp_get_wtime() - t5;
     // ---- Laplace background (non-harmonic part of G_per), exact from the moments
     const double quad = grid_kernel_->quad / (g.h * g.h * g.h);

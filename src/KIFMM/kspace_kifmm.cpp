@@ -229,6 +229,7 @@ void KSpaceKIFMM::init()
     }
   }
   opt.periodic = periodic;
+  if (dipoles) opt.near_pair_weight = kifmm::kDipolePairWeight;    // the tree choice for dipoles
   if (periodic) periodic_root(opt);    // the box: center, half-widths (kspace_kifmm_periodic.cpp)
   if (kset.grid > 0 && !periodic)
     error->all(FLERR, "kspace_modify kifmm grid {}: the single-level grid needs periodic boundaries "
@@ -247,7 +248,7 @@ void KSpaceKIFMM::init()
 
   if (!engine || engine_options.order != opt.order || engine_options.leaf_size != opt.leaf_size ||
       engine_options.cache_dir != opt.cache_dir || engine_options.periodic != opt.periodic ||
-      engine_options.periodic_grid != opt.periodic_grid) {
+      engine_options.periodic_grid != opt.periodic_grid || engine_options.near_pair_weight != opt.near_pair_weight) {
     engine = kifmm::make_evaluator(kernel, opt);
     reported_first_evaluation = false;
   }

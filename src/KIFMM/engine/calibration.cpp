@@ -198,16 +198,16 @@ double self_pair_extra()
   return kSelfExtra;
 }
 
-double modelled_cost(int order, std::size_t n, const TreeCounts &t)
+double modelled_cost(int order, std::size_t n, const TreeCounts &t, double pair_weight)
 {
   const CostConstants c = cost_constants(order);
-  return c.point * (double) n + c.pair * (t.near_pairs + kSelfExtra * t.self_pairs) + c.translation * t.translations +
+  return c.point * (double) n + pair_weight * c.pair * (t.near_pairs + kSelfExtra * t.self_pairs) + c.translation * t.translations +
       c.cell * t.cells + c.entry * t.entries + c.spill * t.spilled_translations;
 }
 
-double modelled_cost(int order, std::size_t n, bool periodic, int depth)
+double modelled_cost(int order, std::size_t n, bool periodic, int depth, double pair_weight)
 {
-  return modelled_cost(order, n, uniform_tree_counts(n, depth, periodic));
+  return modelled_cost(order, n, uniform_tree_counts(n, depth, periodic), pair_weight);
 }
 
 TreeCounts tree_counts(const Octree &tree, const InteractionLists &lists, const PeriodicImageLists *images, int order)
@@ -348,11 +348,11 @@ double grid_cell_cost(int order)
   return 1e-9 * r->cell;
 }
 
-double modelled_grid_cost(int order, std::size_t n, const TreeCounts &t)
+double modelled_grid_cost(int order, std::size_t n, const TreeCounts &t, double pair_weight)
 {
   const CostConstants c = cost_constants(order);
-  return c.point * (double) n + c.pair * (t.near_pairs + kSelfExtra * t.self_pairs) + c.entry * t.entries +
-      grid_cell_cost(order) * t.cells;
+  return c.point * (double) n + pair_weight * c.pair * (t.near_pairs + kSelfExtra * t.self_pairs) +
+      c.entry * t.entries + grid_cell_cost(order) * t.cells;
 }
 
 int max_grid_cells(int order)
@@ -420,16 +420,16 @@ TreeChoice choose_slab_grid(int order, std::size_t n, const double shape[3])
   return g;
 }
 
-TreeChoice choose_tree(int order, std::size_t n, bool periodic, bool grid, const double *shape)
+TreeChoice choose_tree(int order, std::size_t n, bool periodic, bool grid, const double *shape, double w)
 {
   const bool cube = !shape || (shape[0] == 1.0 && shape[1] == 1.0 && shape[2] == 1.0);
   if (cube) shape = nullptr;
   // a periodic cell the octree does not fit: the grid of least modelled cost whose cells do
   if (periodic && shape && !octree_fits_cell(shape)) {
-    TreeChoice g{choose_tree(order, n, false).leaf_size, 0, 0.0, 0};
+    TreeChoice g{choose_tree(order, n, false, false, nullptr, w).leaf_size, 0, 0.0, 0};
     for (int k = 3; k <= max_grid_cells_long(order, shape); ++k) {
       if (!grid_fits_cell(order, k, shape)) continue;
-      const double c = modelled_grid_cost(order, n, uniform_grid_counts(n, k, shape));
+      const double c = modelled_grid_cost(order, n, uniform_grid_counts(n, k, shape), w);
       if (g.grid == 0 || c < g.cost) {
         g.cost = c;
         g.grid = k;
@@ -437,10 +437,10 @@ TreeChoice choose_tree(int order, std::size_t n, bool periodic, bool grid, const
     }
     return g;
   }
-  TreeChoice best{leaf_size_for_depth(n, 0), 0, modelled_cost(order, n, periodic, 0)};
+  TreeChoice best{leaf_size_for_depth(n, 0), 0, modelled_cost(order, n, periodic, 0, w)};
   // depths with at least one point per leaf on average
   for (int d = 1; d <= 20 && std::ldexp(1.0, 3 * d) <= (double) n; ++d) {
-    const double c = modelled_cost(order, n, periodic, d);
+    const double c = modelled_cost(order, n, periodic, d, w);
     if (c < best.cost) best = TreeChoice{leaf_size_for_depth(n, d), d, c};
   }
   if (!periodic || !grid) return best;
@@ -452,7 +452,7 @@ TreeChoice choose_tree(int order, std::size_t n, bool periodic, bool grid, const
   const int kmax = max_grid_cells(order) == 0 ? 0 : max_grid_cells_long(order, shape);    // fitted orders only
   for (int k = 3; k <= kmax && uniform_grid_counts(n, k, shape).cells <= (double) n; ++k) {
     if (shape && !grid_fits_cell(order, k, shape)) continue;
-    const double c = modelled_grid_cost(order, n, uniform_grid_counts(n, k, shape));
+    const double c = modelled_grid_cost(order, n, uniform_grid_counts(n, k, shape), w);
     if (g.grid == 0 || c < g.cost) {
       g.cost = c;
       g.grid = k;
@@ -497,7 +497,7 @@ TreeChoice model_leaf(const ChoicePoints &pts, const Options &o, std::size_t n, 
 {
   int depth = 0;
   const TreeCounts t = counts_of_leaf(pts, o, n, leaf, &depth);
-  return TreeChoice{leaf, depth, modelled_cost(o.order, n, t)};
+  return TreeChoice{leaf, depth, modelled_cost(o.order, n, t, o.near_pair_weight)};
 }
 }    // namespace
 
@@ -523,11 +523,12 @@ TreeChoice choose_tree(const KernelSpec &kernel, const Options &options, std::si
   if (options.periodic && shape && !octree_fits_cell(shape)) {
     // only grids: the one of least modelled cost on the actual occupancies
     const ChoicePoints pts(kernel, options, n, xyz);
-    TreeChoice g{choose_tree(options.order, n, false).leaf_size, 0, 0.0, 0};
+    TreeChoice g{choose_tree(options.order, n, false, false, nullptr, options.near_pair_weight).leaf_size, 0, 0.0, 0};
     for (int k = 3; k <= max_grid_cells_long(options.order, shape); ++k) {
       if (!grid_fits_cell(options.order, k, shape)) continue;
       const double c = modelled_grid_cost(
-          options.order, n, grid_counts(n, pts.xyz, options.root_center, options.root_half_width, k, shape));
+          options.order, n, grid_counts(n, pts.xyz, options.root_center, options.root_half_width, k, shape),
+          options.near_pair_weight);
       if (g.grid == 0 || c < g.cost) {
         g.cost = c;
         g.grid = k;
@@ -535,7 +536,7 @@ TreeChoice choose_tree(const KernelSpec &kernel, const Options &options, std::si
     }
     return g;
   }
-  const TreeChoice uniform = choose_tree(options.order, n, options.periodic);
+  const TreeChoice uniform = choose_tree(options.order, n, options.periodic, false, nullptr, options.near_pair_weight);
   if (n == 0) return uniform;
   // candidates, largest first: leaf sizes not below the uniform choice's (the uniform depths
   // 0 .. d, the geometric means between them, the per-order default leaf): smaller leaves
@@ -580,7 +581,8 @@ TreeChoice choose_tree(const KernelSpec &kernel, const Options &options, std::si
     for (int k = 3; k <= kmax && uniform_grid_counts(n, k, sh).cells <= (double) n; ++k) {
       if (sh && !grid_fits_cell(options.order, k, sh)) continue;
       const double c = modelled_grid_cost(
-          options.order, n, grid_counts(n, pts.xyz, options.root_center, options.root_half_width, k, sh));
+          options.order, n, grid_counts(n, pts.xyz, options.root_center, options.root_half_width, k, sh),
+          options.near_pair_weight);
       if (grid.grid == 0 || c < grid.cost) {
         grid.cost = c;
         grid.grid = k;

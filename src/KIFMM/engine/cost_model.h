@@ -74,10 +74,10 @@ struct CostConstants {
 CostConstants cost_constants(int order);
 
 // Modelled CPU seconds of one evaluation with the full tree of depth d.
-double modelled_cost(int order, std::size_t n, bool periodic, int depth);
+double modelled_cost(int order, std::size_t n, bool periodic, int depth, double pair_weight = 1.0);
 
 // Modelled CPU seconds of one evaluation of n points with these counts.
-double modelled_cost(int order, std::size_t n, const TreeCounts &counts);
+double modelled_cost(int order, std::size_t n, const TreeCounts &counts, double pair_weight = 1.0);
 
 // Counts of an actual tree over points that are both sources and targets (N-body), from its
 // interaction lists (images: the periodic image lists, nullptr with open boundaries), at order
@@ -108,7 +108,7 @@ TreeCounts uniform_grid_counts(std::size_t n, int k, const double *shape = nullp
 TreeCounts grid_counts(std::size_t n, const double *xyz, const double center[3], double half_width, int k,
                        const double *shape = nullptr);
 double grid_cell_cost(int order);    // seconds
-double modelled_grid_cost(int order, std::size_t n, const TreeCounts &counts);
+double modelled_grid_cost(int order, std::size_t n, const TreeCounts &counts, double pair_weight = 1.0);
 // Largest grid (cells per side) offered at this order: its kernels (periodic_grid.h) and the
 // convolution buffer are each at most 64 MB; 0 above the largest order with a fitted constant.
 // Rectangular cells: at most max_grid_cells^3 cells in all.

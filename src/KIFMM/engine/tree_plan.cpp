@@ -33,7 +33,8 @@ TreePlan plan_tree(const Options &options, const TreeRequest &request, const Opt
     return plan;
   }
   const bool choose_grid = grid_is_chosen(options, request);
-  plan.uniform = choose_tree(opt.order, request.n, opt.periodic, choose_grid, opt.periodic ? opt.root_shape : nullptr);
+  plan.uniform = choose_tree(opt.order, request.n, opt.periodic, choose_grid, opt.periodic ? opt.root_shape : nullptr,
+                             opt.near_pair_weight);
   opt.leaf_size = plan.uniform.leaf_size;
   if (choose_grid) opt.periodic_grid = plan.uniform.grid;
   // several ranks: each holds only its own points, so the uniform choice, the same on every rank

@@ -31,6 +31,9 @@ struct KernelSpec {
 struct Options {
   int order = 6;           // points per edge of the equivalent/check surface grid (p)
   int leaf_size = 0;       // max points per leaf (M); 0 = engine default for this order
+  // the tree choice's cost of a near-field pair relative to a charge pair (kDipolePairWeight
+  // for evaluate_dipoles: their near-field loop costs more per pair, so smaller leaves pay)
+  double near_pair_weight = 1.0;
   int max_depth = 20;      // hard limit on tree depth (coincident clusters stop here)
   std::string cache_dir;   // on-disk operator cache; empty = in-memory cache only
   // Fixed root box instead of the bounding cube of the points (e.g. a periodic cell).
@@ -149,6 +152,11 @@ void direct_sum(const KernelSpec &kernel, std::size_t n_src, const double *src_x
                 const double *src_q, std::size_t n_trg, const double *trg_xyz, double *pot,
                 double *grad);
 
+// Near-field cost per pair of evaluate_dipoles with second derivatives (mutual loop, charges
+// and dipoles) over that of charges (bench/dipoles/results): Options::near_pair_weight of
+// dipole evaluations.
+constexpr double kDipolePairWeight = 4.0;
+
 // Exact O(N*M) reference of evaluate_dipoles (same conventions; hess may be null).
 void direct_sum_dipoles(const KernelSpec &kernel, std::size_t n_src, const double *src_xyz, const double *src_q,
                         const double *src_mu, std::size_t n_trg, const double *trg_xyz, double *pot, double *grad,
@@ -193,7 +201,8 @@ struct TreeChoice {
 // choice from the points below (TreeChoice::grid; the octree's leaf size and depth are kept).
 // shape (periodic, Options::root_shape; null: a cube): grids of nearly cubic cells only, and in
 // cells the octree does not fit (octree_fits_cell) only grids (grid 0 returned: none fits).
-TreeChoice choose_tree(int order, std::size_t n, bool periodic, bool grid = false, const double *shape = nullptr);
+TreeChoice choose_tree(int order, std::size_t n, bool periodic, bool grid = false, const double *shape = nullptr,
+                       double near_pair_weight = 1.0);
 
 // Periodic cells that are not cubes (Options::root_shape, the half-widths per axis in units of
 // the largest): every cell of the octree has the periodic cell's shape, and the single-level

@@ -103,9 +103,16 @@ void exact_dipole_field(const Evaluator &ev, std::size_t n_src, const double *sr
                         const double *src_mu, std::size_t n_trg, const double *trg_xyz, double *grad, double *hess)
 {
   const Options &opt = ev.options();
-  if (opt.periodic && (opt.periodic_dims != 3 || ev.kernel().type != KernelType::Laplace))
-    throw std::invalid_argument("kifmm: the exact sum of periodic dipoles is for p p p and the Laplace kernel");
-  if (opt.periodic)
+  if (opt.periodic && ev.kernel().type != KernelType::Laplace)
+    throw std::invalid_argument("kifmm: the exact sum of periodic dipoles is for the Laplace kernel");
+  if (opt.periodic && opt.periodic_dims == 2) {    // a slab: the engine itself at order 14
+    Options hi = opt;
+    hi.order = 14;
+    hi.leaf_size = 0;
+    hi.cache_dir.clear();
+    make_evaluator(ev.kernel(), hi)->evaluate_dipoles(n_src, src_xyz, src_q, src_mu, n_trg, trg_xyz, nullptr, grad,
+                                                      hess);
+  } else if (opt.periodic)
     periodic_dipole_direct_sum(opt.root_center, opt.root_half_width, opt.root_shape, n_src, src_xyz, src_q, src_mu,
                                n_trg, trg_xyz, nullptr, grad, hess);
   else

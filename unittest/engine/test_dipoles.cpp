@@ -120,9 +120,9 @@ struct Case {
 // the order
 TEST(Dipoles, FmmEqualsTheExactSum)
 {
-  const std::vector<Case> cases = {{"uniform, charges and dipoles", uniform_cube(3000, 11), true, {}},
-                                   {"two clusters, dipoles only", two_clusters(3000, 12), false, {}},
-                                   {"plummer, yukawa", plummer(2000, 13), true, yukawa(3.0)}};
+  const std::vector<Case> cases = {{"uniform, charges and dipoles", uniform_cube(1500, 11), true, {}},
+                                   {"two clusters, dipoles only", two_clusters(1500, 12), false, {}},
+                                   {"plummer, yukawa", plummer(1200, 13), true, yukawa(3.0)}};
   for (const auto &c : cases) {
     const Dipoles s = random_dipoles(c.pts, 21, c.charges);
     const Field ref = exact(c.kernel, s, s.p);
@@ -130,7 +130,7 @@ TEST(Dipoles, FmmEqualsTheExactSum)
     for (int order : {4, 6, 8, 10}) {
       kifmm::Options o;
       o.order = order;
-      o.leaf_size = 64;
+      o.leaf_size = 32;
       auto ev = kifmm::make_evaluator(c.kernel, o);
       const Field f = fmm(*ev, s);
       const double err[3] = {rel_l2(f.pot, ref.pot), rel_l2(f.grad, ref.grad), rel_l2(f.hess, ref.hess)};
@@ -289,7 +289,7 @@ TEST(Dipoles, PeriodicEqualsEwald)
   for (const Box &b : {Box{"cube, octree", {1, 1, 1}, 0, true}, Box{"cube, grid", {1, 1, 1}, 4, true},
                        Box{"2x1x1, grid", {1, 0.5, 0.5}, 6, true}, Box{"charged, octree", {1, 1, 1}, 0, false},
                        Box{"charged, grid", {1, 1, 1}, 4, false}}) {
-    Points pts = uniform_cube(400, 61);
+    Points pts = uniform_cube(250, 61);
     for (std::size_t i = 0; i < pts.size(); ++i)
       for (int d = 0; d < 3; ++d) pts.xyz[3 * i + d] *= b.shape[d];
     Dipoles s = random_dipoles(b.neutral ? neutral(pts) : pts, 62, true);
@@ -339,7 +339,7 @@ double ewald_energy(const Dipoles &s, const double L[3])
 TEST(Dipoles, PeriodicVirialIsTheStrainDerivative)
 {
   for (const double sy : {1.0, 0.5}) {
-    Points pts = uniform_cube(200, 71);
+    Points pts = uniform_cube(120, 71);
     const double shape[3] = {1.0, sy, 1.0};
     for (std::size_t i = 0; i < pts.size(); ++i) pts.xyz[3 * i + 1] *= sy;
     Dipoles s = random_dipoles(neutral(pts), 72, true);
@@ -388,7 +388,7 @@ TEST(Dipoles, SlabEqualsTheLimitOfChargePairs)
       for (int d = 0; d < 3; ++d) p.xyz[3 * i + d] = c[d] + h * shape[d] * p.xyz[3 * i + d];
     return p;
   };
-  const Dipoles s = random_dipoles(place(neutral(uniform_cube(150, 81))), 82, true);
+  const Dipoles s = random_dipoles(place(neutral(uniform_cube(100, 81))), 82, true);
   Points t;
   {
     const Points cand = place(uniform_cube(200, 83));

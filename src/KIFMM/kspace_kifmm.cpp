@@ -553,14 +553,16 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   if (eflag_global || keep) MPI_Allreduce(&e_local, &energy, 1, MPI_DOUBLE, MPI_SUM, world);
   if (vflag_global || keep) MPI_Allreduce(v_local, virial, 6, MPI_DOUBLE, MPI_SUM, world);
   const bool tensor = periodic_tensor() && !dipoles;
-  if (dipoles && slab && vflag_atom)
+  // slabs and periodic yukawa: no dipole virial (as for periodic yukawa charges)
+  const bool no_dipole_virial = dipoles && (slab || (periodic && kset.kernel == LongRangeKernel::Yukawa));
+  if (no_dipole_virial && vflag_atom)
     error->all(FLERR, "kspace_style kifmm: the per-atom virial (compute stress/atom) of point dipoles in a slab "
-               "(boundary p p f) is not available in this version");
-  if (dipoles && slab && (vflag_global || keep)) {    // as periodic yukawa: no virial
+               "(boundary p p f) or with periodic yukawa is not available in this version");
+  if (no_dipole_virial && (vflag_global || keep)) {
     for (double &v : virial) v = 0.0;
     if (!warned_periodic_virial && comm->me == 0)
-      error->warning(FLERR, "kspace_style kifmm: the virial of point dipoles in a slab (boundary p p f) is not "
-                     "computed (0); the pressure has no long-range part");
+      error->warning(FLERR, "kspace_style kifmm: the virial of point dipoles in a slab (boundary p p f) or with "
+                     "periodic yukawa is not computed (0); the pressure has no long-range part");
     warned_periodic_virial = true;
   } else if (dipoles && (periodic || vflag_atom) && (vflag_global || keep || vflag_atom))
     dipole_virial(cf, periodic && (vflag_global || keep), vflag_atom);    // kspace_kifmm_dipoles.cpp

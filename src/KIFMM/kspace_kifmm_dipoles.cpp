@@ -54,9 +54,6 @@ void KSpaceKIFMM::dipole_init()
   if (kset.kernel == LongRangeKernel::Gravity)
     error->all(FLERR, "kspace_style kifmm kernel gravity has no dipoles: the atoms have dipole moments (mu); "
                       "use kernel coulomb or yukawa");
-  if (periodic && kset.kernel != LongRangeKernel::Coulomb)
-    error->all(FLERR, "kspace_style kifmm: point dipoles (atoms with a dipole moment mu) with periodic boundaries "
-                      "need kernel coulomb in this version");
   if (!atom->torque_flag)
     error->all(FLERR, "kspace_style kifmm: atoms with dipole moments need atom attribute torque "
                       "(atom_style hybrid sphere dipole)");

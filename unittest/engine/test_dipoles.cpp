@@ -463,3 +463,60 @@ TEST(Dipoles, SlabEqualsTheLimitOfChargePairs)
 }
 
 }    // namespace
+
+namespace {
+
+// periodic yukawa (no Ewald sum of dipoles is written for it): the extrapolated limit of charge
+// pairs in the exact periodic sum of charges (periodic_direct_sum), at targets away from the
+// sources; octree and grid
+TEST(Dipoles, PeriodicYukawaEqualsTheLimitOfChargePairs)
+{
+  const double c[3] = {0, 0, 0};
+  const kifmm::KernelSpec k = yukawa(1.5);
+  const Dipoles s = random_dipoles(neutral(uniform_cube(150, 91)), 92, true);
+  Points t;
+  {
+    const Points cand = uniform_cube(200, 93);
+    for (std::size_t i = 0; i < cand.size() && t.size() < 30; ++i) {
+      double dmin = 1e300;
+      for (std::size_t j = 0; j < s.p.size(); ++j) {
+        double r2 = 0;
+        for (int d = 0; d < 3; ++d) r2 += std::pow(cand.xyz[3 * i + d] - s.p.xyz[3 * j + d], 2);
+        dmin = std::min(dmin, r2);
+      }
+      if (dmin > 0.1 * 0.1) {
+        t.xyz.insert(t.xyz.end(), cand.xyz.begin() + 3 * i, cand.xyz.begin() + 3 * i + 3);
+        t.q.push_back(0.0);
+      }
+    }
+  }
+  std::vector<double> ref[2];
+  for (int level = 0; level < 2; ++level) {
+    const double e = level == 0 ? 2e-4 : 1e-4;
+    Points pair;
+    for (std::size_t j = 0; j < s.p.size(); ++j) {
+      for (int d = 0; d < 3; ++d) pair.xyz.push_back(s.p.xyz[3 * j + d]);
+      pair.q.push_back(s.p.q[j]);
+      for (int sg : {1, -1}) {
+        for (int d = 0; d < 3; ++d) pair.xyz.push_back(s.p.xyz[3 * j + d] + sg * 0.5 * e * s.mu[3 * j + d]);
+        pair.q.push_back(sg / e);
+      }
+    }
+    ref[level].resize(3 * t.size());
+    kifmm::periodic_direct_sum(k, c, 1.0, pair.size(), pair.xyz.data(), pair.q.data(), t.size(), t.xyz.data(),
+                               nullptr, ref[level].data());
+  }
+  std::vector<double> rg(3 * t.size());
+  for (std::size_t i = 0; i < rg.size(); ++i) rg[i] = (4 * ref[1][i] - ref[0][i]) / 3;
+  for (int grid : {0, 4}) {
+    auto ev = kifmm::make_evaluator(k, periodic_options(10, 32, 1.0, nullptr, grid));
+    std::vector<double> grad(3 * t.size()), hess(6 * t.size());
+    ev->evaluate_dipoles(s.p.size(), s.p.xyz.data(), s.p.q.data(), s.mu.data(), t.size(), t.xyz.data(), nullptr,
+                         grad.data(), hess.data());
+    const double err = rel_l2(grad, rg);
+    std::printf("periodic yukawa, %s: grad %.2e\n", grid ? "grid" : "octree", err);
+    EXPECT_LT(err, 1e-7) << grid;
+  }
+}
+
+}    // namespace

@@ -103,9 +103,8 @@ void exact_dipole_field(const Evaluator &ev, std::size_t n_src, const double *sr
                         const double *src_mu, std::size_t n_trg, const double *trg_xyz, double *grad, double *hess)
 {
   const Options &opt = ev.options();
-  if (opt.periodic && ev.kernel().type != KernelType::Laplace)
-    throw std::invalid_argument("kifmm: the exact sum of periodic dipoles is for the Laplace kernel");
-  if (opt.periodic && opt.periodic_dims == 2) {    // a slab: the engine itself at order 14
+  if (opt.periodic && (opt.periodic_dims == 2 || ev.kernel().type != KernelType::Laplace)) {
+    // a slab, periodic yukawa: the engine itself at order 14
     Options hi = opt;
     hi.order = 14;
     hi.leaf_size = 0;

@@ -407,7 +407,7 @@ void exact_gradient(const Evaluator &ev, Communicator *comm, std::size_t n_src,
                     const double *trg_xyz, double *grad);
 // The same for charges and dipoles (one process): the exact gradient and second derivatives
 // at the targets (open: direct_sum_dipoles; p p p: an Ewald sum with the engine's conventions;
-// a slab: the engine at order 14, 1e-10 in the tests).
+// a slab or periodic yukawa: the engine at order 14, 1e-10 in the tests).
 void exact_dipole_field(const Evaluator &ev, std::size_t n_src, const double *src_xyz, const double *src_q,
                         const double *src_mu, std::size_t n_trg, const double *trg_xyz, double *grad, double *hess);
 // `want` of the candidates at random, without replacement (all when want >= their number).

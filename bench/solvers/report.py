@@ -1892,6 +1892,7 @@ for that error. The **speed ratio** at E is the other solver's time divided by k
         w("## Plots\n")
         for k, cap in shown:
             w(f"![{k}]({rel[k]})\n\n*{cap}.*\n")
+    w(extra_sections())
     w("## Where kifmm is slower\n")
     w("Every case, N and error at which another solver needed less CPU time than kifmm:\n")
     w(loss_list(recs, cases, rechecks))
@@ -1912,6 +1913,16 @@ for that error. The **speed ratio** at E is the other solver's time divided by k
     with open(doc, "w") as f:
         f.write(wrap_md("\n".join(x.rstrip("\n") + "\n" for x in out)
                         .replace("\n\n\n", "\n\n")))
+
+
+def extra_sections():
+    """The sections of other benchmarks (bench/solvers/sections/*.md, in name order): their
+    tables are written from their own results, which this report does not read."""
+    d = os.path.join(os.path.dirname(os.path.abspath(__file__)), "sections")
+    if not os.path.isdir(d):
+        return ""
+    return "".join(open(os.path.join(d, f)).read().rstrip("\n") + "\n\n" for f in sorted(os.listdir(d))
+                   if f.endswith(".md"))
 
 
 def main():

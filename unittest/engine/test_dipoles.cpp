@@ -120,17 +120,17 @@ struct Case {
 // the order
 TEST(Dipoles, FmmEqualsTheExactSum)
 {
-  const std::vector<Case> cases = {{"uniform, charges and dipoles", uniform_cube(1500, 11), true, {}},
-                                   {"two clusters, dipoles only", two_clusters(1500, 12), false, {}},
-                                   {"plummer, yukawa", plummer(1200, 13), true, yukawa(3.0)}};
+  const std::vector<Case> cases = {{"uniform, charges and dipoles", uniform_cube(1000, 11), true, {}},
+                                   {"two clusters, dipoles only", two_clusters(1000, 12), false, {}},
+                                   {"plummer, yukawa", plummer(800, 13), true, yukawa(3.0)}};
   for (const auto &c : cases) {
     const Dipoles s = random_dipoles(c.pts, 21, c.charges);
     const Field ref = exact(c.kernel, s, s.p);
     double last[3] = {1, 1, 1};
-    for (int order : {4, 6, 8, 10}) {
+    for (int order : {4, 7, 10}) {
       kifmm::Options o;
       o.order = order;
-      o.leaf_size = 32;
+      o.leaf_size = 24;
       auto ev = kifmm::make_evaluator(c.kernel, o);
       const Field f = fmm(*ev, s);
       const double err[3] = {rel_l2(f.pot, ref.pot), rel_l2(f.grad, ref.grad), rel_l2(f.hess, ref.hess)};

@@ -140,6 +140,7 @@ class KSpaceKIFMM : public KSpace {
   std::unique_ptr<kifmm::Evaluator> virial_engine;
   kifmm::Evaluator &virial_evaluator();
   void periodic_tensor_virial(double prefactor, bool global, bool peratom);
+  void store_point_virial(const std::vector<double> &w, bool global, bool peratom);
 
   // the fix scheduling the evaluations (fix kifmm/stride), found among the fixes at init
   class KIFMMForceSchedule *schedule = nullptr;

@@ -153,15 +153,7 @@ void KSpaceKIFMM::dipole_virial(double cf, bool global, bool peratom)
                                  hess.data(), cf, w.data(), center);
     }
   }
-  if (global) {
-    double v_local[6] = {0, 0, 0, 0, 0, 0};
-    for (std::size_t k = 0; k < n; ++k)
-      for (int c = 0; c < 6; ++c) v_local[c] += w[6 * k + c];
-    MPI_Allreduce(v_local, virial, 6, MPI_DOUBLE, MPI_SUM, world);
-  }
-  if (peratom)
-    for (std::size_t k = 0; k < n; ++k)
-      for (int c = 0; c < 6; ++c) vatom[index[k]][c] += w[6 * k + c];
+  store_point_virial(w, global, peratom);
 }
 
 // Sampled error of forces and torques against the exact sum over all ranks' points.

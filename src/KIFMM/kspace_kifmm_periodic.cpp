@@ -323,6 +323,13 @@ void KSpaceKIFMM::periodic_tensor_virial(double cf, bool global, bool peratom)
   kifmm::periodic_point_virial(virial_evaluator(), distributed() ? kcomm.get() : nullptr, n, xyz.data(),
                                strength.data(), grad.data(), cf, w.data(), u.data());
   add_body_pair_virial(cf, u.data(), w.data());
+  store_point_virial(w, global, peratom);
+}
+
+// Per-point virials w (6 per point) into the global virial (summed over ranks) and/or vatom.
+void KSpaceKIFMM::store_point_virial(const std::vector<double> &w, bool global, bool peratom)
+{
+  const std::size_t n = index.size();
   if (global) {
     double v_local[6] = {0, 0, 0, 0, 0, 0};
     for (std::size_t k = 0; k < n; ++k)

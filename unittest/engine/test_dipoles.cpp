@@ -40,6 +40,40 @@ struct Field {
   std::vector<double> pot, grad, hess;
 };
 
+// up to m of the candidates that lie farther than dmin from every source
+Points targets_away_from(const Dipoles &s, const Points &cand, std::size_t m, double dmin)
+{
+  Points t;
+  for (std::size_t i = 0; i < cand.size() && t.size() < m; ++i) {
+    double r2min = 1e300;
+    for (std::size_t j = 0; j < s.p.size(); ++j) {
+      double r2 = 0;
+      for (int d = 0; d < 3; ++d) r2 += std::pow(cand.xyz[3 * i + d] - s.p.xyz[3 * j + d], 2);
+      r2min = std::min(r2min, r2);
+    }
+    if (r2min > dmin * dmin) {
+      t.xyz.insert(t.xyz.end(), cand.xyz.begin() + 3 * i, cand.xyz.begin() + 3 * i + 3);
+      t.q.push_back(0.0);
+    }
+  }
+  return t;
+}
+
+// every source's charge, and its dipole as charges +-1/e at +-e mu/2
+Points charge_pairs(const Dipoles &s, double e)
+{
+  Points pair;
+  for (std::size_t j = 0; j < s.p.size(); ++j) {
+    for (int d = 0; d < 3; ++d) pair.xyz.push_back(s.p.xyz[3 * j + d]);
+    pair.q.push_back(s.p.q[j]);
+    for (int sg : {1, -1}) {
+      for (int d = 0; d < 3; ++d) pair.xyz.push_back(s.p.xyz[3 * j + d] + sg * 0.5 * e * s.mu[3 * j + d]);
+      pair.q.push_back(sg / e);
+    }
+  }
+  return pair;
+}
+
 Field exact(const kifmm::KernelSpec &k, const Dipoles &s, const Points &t)
 {
   Field f{std::vector<double>(t.size()), std::vector<double>(3 * t.size()), std::vector<double>(6 * t.size())};
@@ -389,35 +423,8 @@ TEST(Dipoles, SlabEqualsTheLimitOfChargePairs)
     return p;
   };
   const Dipoles s = random_dipoles(place(neutral(uniform_cube(100, 81))), 82, true);
-  Points t;
-  {
-    const Points cand = place(uniform_cube(200, 83));
-    for (std::size_t i = 0; i < cand.size() && t.size() < 25; ++i) {
-      double dmin = 1e300;
-      for (std::size_t j = 0; j < s.p.size(); ++j) {
-        double r2 = 0;
-        for (int d = 0; d < 3; ++d) r2 += std::pow(cand.xyz[3 * i + d] - s.p.xyz[3 * j + d], 2);
-        dmin = std::min(dmin, r2);
-      }
-      if (dmin > 0.1 * 0.1) {
-        t.xyz.insert(t.xyz.end(), cand.xyz.begin() + 3 * i, cand.xyz.begin() + 3 * i + 3);
-        t.q.push_back(0.0);
-      }
-    }
-  }
-  auto pairs = [&](double e) {
-    Points pair;
-    for (std::size_t j = 0; j < s.p.size(); ++j) {
-      for (int d = 0; d < 3; ++d) pair.xyz.push_back(s.p.xyz[3 * j + d]);
-      pair.q.push_back(s.p.q[j]);
-      for (int sg : {1, -1}) {
-        for (int d = 0; d < 3; ++d) pair.xyz.push_back(s.p.xyz[3 * j + d] + sg * 0.5 * e * s.mu[3 * j + d]);
-        pair.q.push_back(sg / e);
-      }
-    }
-    return pair;
-  };
-  const Points p1 = pairs(2e-4), p2 = pairs(1e-4);
+  const Points t = targets_away_from(s, place(uniform_cube(200, 83)), 25, 0.1);
+  const Points p1 = charge_pairs(s, 2e-4), p2 = charge_pairs(s, 1e-4);
   auto slab_ref = [&](const Points &tt, std::vector<double> &pot, std::vector<double> &grad) {
     std::vector<double> a(tt.size()), ga(3 * tt.size()), b(tt.size()), gb(3 * tt.size());
     kifmm::slab_direct_sum(c, h, shape, p1.size(), p1.xyz.data(), p1.q.data(), tt.size(), tt.xyz.data(), a.data(),
@@ -474,34 +481,10 @@ TEST(Dipoles, PeriodicYukawaEqualsTheLimitOfChargePairs)
   const double c[3] = {0, 0, 0};
   const kifmm::KernelSpec k = yukawa(1.5);
   const Dipoles s = random_dipoles(neutral(uniform_cube(150, 91)), 92, true);
-  Points t;
-  {
-    const Points cand = uniform_cube(200, 93);
-    for (std::size_t i = 0; i < cand.size() && t.size() < 30; ++i) {
-      double dmin = 1e300;
-      for (std::size_t j = 0; j < s.p.size(); ++j) {
-        double r2 = 0;
-        for (int d = 0; d < 3; ++d) r2 += std::pow(cand.xyz[3 * i + d] - s.p.xyz[3 * j + d], 2);
-        dmin = std::min(dmin, r2);
-      }
-      if (dmin > 0.1 * 0.1) {
-        t.xyz.insert(t.xyz.end(), cand.xyz.begin() + 3 * i, cand.xyz.begin() + 3 * i + 3);
-        t.q.push_back(0.0);
-      }
-    }
-  }
+  const Points t = targets_away_from(s, uniform_cube(200, 93), 30, 0.1);
   std::vector<double> ref[2];
   for (int level = 0; level < 2; ++level) {
-    const double e = level == 0 ? 2e-4 : 1e-4;
-    Points pair;
-    for (std::size_t j = 0; j < s.p.size(); ++j) {
-      for (int d = 0; d < 3; ++d) pair.xyz.push_back(s.p.xyz[3 * j + d]);
-      pair.q.push_back(s.p.q[j]);
-      for (int sg : {1, -1}) {
-        for (int d = 0; d < 3; ++d) pair.xyz.push_back(s.p.xyz[3 * j + d] + sg * 0.5 * e * s.mu[3 * j + d]);
-        pair.q.push_back(sg / e);
-      }
-    }
+    const Points pair = charge_pairs(s, level == 0 ? 2e-4 : 1e-4);
     ref[level].resize(3 * t.size());
     kifmm::periodic_direct_sum(k, c, 1.0, pair.size(), pair.xyz.data(), pair.q.data(), t.size(), t.xyz.data(),
                                nullptr, ref[level].data());

@@ -848,7 +848,7 @@ void FmmEvaluator<K>::evaluate_tree(double t0, std::size_t ns, const double *sxy
 
 // Charges and dipoles: the passes of evaluate() (tree or periodic grid) with dipole sources in
 // the spans of the source points (P2M, P2L, near field) and second derivatives in the spans of
-// the targets (near field, M2P, L2P); the near field is one-sided (no mutual pairs); periodic
+// the targets (near field, M2P, L2P); mutual near field when sources = targets; periodic
 // Laplace: the dipoles' part of the background and of the grid's wrap correction.
 template <class K>
 void FmmEvaluator<K>::evaluate_dipoles(std::size_t n_src, const double *src_xyz, const double *src_q,

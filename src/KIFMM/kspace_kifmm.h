@@ -65,7 +65,12 @@ class KSpaceKIFMM : public KSpace {
   std::vector<double> moment, hess;
   void dipole_init();
   bool is_point(int i) const;    // a source and target of the sum
-  void gather_all_dipoles(std::vector<double> &all_xyz, std::vector<double> &all_q, std::vector<double> &all_mu);
+  std::vector<double> gathered_xyz, gathered_q, gathered_mu;    // several ranks: the points of all
+  struct DipoleSources {
+    std::size_t n;
+    const double *xyz, *q, *mu;
+  };
+  DipoleSources dipole_sources() const;
   void evaluate_dipole_points(bool want_potential, double &comm_time, std::size_t &nsrc);
   // force and torque of point k (torque zero without dipoles), its energy
   void point_force(std::size_t k, double prefactor, double f[3], double t[3]) const;

@@ -70,15 +70,13 @@ bool KSpaceKIFMM::is_point(int i) const
   return strength_of(i) != 0.0 || (dipoles && has_moment(atom->mu[i]));
 }
 
-// The gathered points of all ranks (positions, charges, moments), for the sources of a
-// dipole evaluation on several ranks and for the exact reference of the error check.
-void KSpaceKIFMM::gather_all_dipoles(std::vector<double> &all_xyz, std::vector<double> &all_q,
-                                     std::vector<double> &all_mu)
+// The sources of a dipole evaluation: this rank's points on one rank; on several, the points of
+// all ranks, gathered once per evaluation (evaluate_dipole_points) and used again by the virial
+// and the error check of the same step.
+KSpaceKIFMM::DipoleSources KSpaceKIFMM::dipole_sources() const
 {
-  std::vector<int> counts;
-  kcomm->allgatherv(xyz, all_xyz, counts);
-  kcomm->allgatherv(strength, all_q, counts);
-  kcomm->allgatherv(moment, all_mu, counts);
+  if (distributed()) return {gathered_q.size(), gathered_xyz.data(), gathered_q.data(), gathered_mu.data()};
+  return {strength.size(), xyz.data(), strength.data(), moment.data()};
 }
 
 void KSpaceKIFMM::evaluate_dipole_points(bool want_potential, double &comm_time, std::size_t &nsrc)
@@ -90,12 +88,14 @@ void KSpaceKIFMM::evaluate_dipole_points(bool want_potential, double &comm_time,
   comm_time = 0;
   if (distributed()) {
     const double t0 = MPI_Wtime();
-    std::vector<double> all_xyz, all_q, all_mu;
-    gather_all_dipoles(all_xyz, all_q, all_mu);
+    std::vector<int> counts;
+    kcomm->allgatherv(xyz, gathered_xyz, counts);
+    kcomm->allgatherv(strength, gathered_q, counts);
+    kcomm->allgatherv(moment, gathered_mu, counts);
     comm_time = MPI_Wtime() - t0;
-    nsrc = all_q.size();
+    nsrc = gathered_q.size();
     check_memory(nsrc);
-    engine->evaluate_dipoles(nsrc, all_xyz.data(), all_q.data(), all_mu.data(), n, xyz.data(),
+    engine->evaluate_dipoles(nsrc, gathered_xyz.data(), gathered_q.data(), gathered_mu.data(), n, xyz.data(),
                              want_potential ? pot.data() : nullptr, grad.data(), hess.data());
     unsigned long long mine = engine->stats().n_sources, all = 0;
     MPI_Allreduce(&mine, &all, 1, MPI_UNSIGNED_LONG_LONG, MPI_MAX, world);
@@ -135,22 +135,17 @@ double KSpaceKIFMM::point_energy(std::size_t k, double ce) const
 void KSpaceKIFMM::dipole_virial(double cf, bool global, bool peratom)
 {
   const std::size_t n = index.size();
-  std::vector<double> w(6 * n), all_xyz, all_q, all_mu;
-  const double *sx = xyz.data(), *sq = strength.data(), *sm = moment.data();
-  std::size_t ns = n;
-  if (distributed()) {
-    gather_all_dipoles(all_xyz, all_q, all_mu);
-    sx = all_xyz.data(), sq = all_q.data(), sm = all_mu.data(), ns = all_q.size();
-  }
-  if (ns > 0) {
+  std::vector<double> w(6 * n);
+  const DipoleSources s = dipole_sources();
+  if (s.n > 0) {
     if (periodic) {
-      kifmm::periodic_dipole_point_virial(virial_evaluator(), ns, sx, sq, sm, n, xyz.data(), strength.data(),
+      kifmm::periodic_dipole_point_virial(virial_evaluator(), s.n, s.xyz, s.q, s.mu, n, xyz.data(), strength.data(),
                                           moment.data(), grad.data(), hess.data(), cf, w.data());
     } else {
       const double center[3] = {0.5 * (domain->boxlo[0] + domain->boxhi[0]), 0.5 * (domain->boxlo[1] + domain->boxhi[1]),
                                 0.5 * (domain->boxlo[2] + domain->boxhi[2])};
-      kifmm::dipole_point_virial(*engine, ns, sx, sq, sm, n, xyz.data(), strength.data(), moment.data(), grad.data(),
-                                 hess.data(), cf, w.data(), center);
+      kifmm::dipole_point_virial(*engine, s.n, s.xyz, s.q, s.mu, n, xyz.data(), strength.data(), moment.data(),
+                                 grad.data(), hess.data(), cf, w.data(), center);
     }
   }
   store_point_virial(w, global, peratom);
@@ -160,9 +155,10 @@ void KSpaceKIFMM::dipole_virial(double cf, bool global, bool peratom)
 KSpaceKIFMM::MeasuredError KSpaceKIFMM::measure_dipole_error(int nsamples)
 {
   const std::size_t n = index.size();
-  std::vector<double> all_xyz, all_q, all_mu;
-  gather_all_dipoles(all_xyz, all_q, all_mu);
-  const double nall = (double) all_q.size();
+  const DipoleSources src = dipole_sources();
+  bigint nmine = (bigint) n, ntotal = 0;
+  MPI_Allreduce(&nmine, &ntotal, 1, MPI_LMP_BIGINT, MPI_SUM, world);
+  const double nall = (double) ntotal;
   const unsigned long long seed = 1234567ULL + 7919ULL * (unsigned long long) update->ntimestep;
   std::vector<std::size_t> mine(n);
   for (std::size_t k = 0; k < n; ++k) mine[k] = k;
@@ -173,8 +169,7 @@ KSpaceKIFMM::MeasuredError KSpaceKIFMM::measure_dipole_error(int nsamples)
   std::vector<double> txyz(3 * m), g(3 * m), h(6 * m);
   for (std::size_t s = 0; s < m; ++s)
     for (int d = 0; d < 3; ++d) txyz[3 * s + d] = xyz[3 * sample[s] + d];
-  kifmm::exact_dipole_field(*engine, all_q.size(), all_xyz.data(), all_q.data(), all_mu.data(), m, txyz.data(),
-                            g.data(), h.data());
+  kifmm::exact_dipole_field(*engine, src.n, src.xyz, src.q, src.mu, m, txyz.data(), g.data(), h.data());
   // sums: force diff2, ref2, all evaluated force2; torque the same
   double sums[6] = {0, 0, 0, 0, 0, 0}, tot[6];
   double f[3], t[3], fe[3], te[3];

@@ -64,6 +64,32 @@ inline std::size_t nonzero_sources(std::size_t n, const double *&xyz, const doub
   return kq.size();
 }
 
+// The same for charges and dipole moments (evaluate_dipoles): the sources with a charge or a
+// moment; xyz/q/mu are redirected to copies when some have neither, or when q is null (then
+// the copies' charges are zero); mu may be null (no moments, it stays null).
+inline std::size_t nonzero_dipole_sources(std::size_t n, const double *&xyz, const double *&q, const double *&mu,
+                                          std::vector<double> &kxyz, std::vector<double> &kq,
+                                          std::vector<double> &kmu)
+{
+  auto strong = [&](std::size_t j) {
+    return (q && q[j] != 0.0) || (mu && (mu[3 * j] != 0.0 || mu[3 * j + 1] != 0.0 || mu[3 * j + 2] != 0.0));
+  };
+  std::size_t keep = 0;
+  for (std::size_t j = 0; j < n; ++j) keep += strong(j);
+  if (keep == n && q) return n;
+  kxyz.clear(), kq.clear(), kmu.clear();
+  for (std::size_t j = 0; j < n; ++j)
+    if (strong(j)) {
+      kxyz.insert(kxyz.end(), xyz + 3 * j, xyz + 3 * j + 3);
+      kq.push_back(q ? q[j] : 0.0);
+      if (mu) kmu.insert(kmu.end(), mu + 3 * j, mu + 3 * j + 3);
+    }
+  xyz = kxyz.data();
+  q = kq.data();
+  if (mu) mu = kmu.data();
+  return kq.size();
+}
+
 template <class K> class FmmEvaluator : public Evaluator {
  public:
   FmmEvaluator(const K &k, const KernelSpec &spec, const Options &opt) : k_(k), spec_(spec), opt_(opt)
@@ -126,7 +152,7 @@ template <class K> class FmmEvaluator : public Evaluator {
   // sorted) and the targets' second derivatives (th_[0..5] = xx yy zz xy xz yz when hess_)
   const double *dip_mu_ = nullptr;
   bool hess_ = false;
-  std::vector<double> smx_, smy_, smz_, th_[6], dip_kmu_;
+  std::vector<double> smx_, smy_, smz_, th_[6], dip_kmu_;    // dip_kmu_: compacted moments
   struct DipoleMode {    // the dipole spans for one call only (also when a pass throws)
     FmmEvaluator &e;
     ~DipoleMode() { e.dip_mu_ = nullptr, e.hess_ = false; }
@@ -457,6 +483,12 @@ void FmmEvaluator<K>::sorted_copies(std::size_t ns, const double *sxyz, const do
   sy_.resize(ns);
   sz_.resize(ns);
   sq_.resize(ns);
+  const double *mu = dip_mu_;    // dipole moments (evaluate_dipoles), input order
+  if (mu) {
+    smx_.resize(ns);
+    smy_.resize(ns);
+    smz_.resize(ns);
+  }
   tx_.resize(n_trg);
   ty_.resize(n_trg);
   tz_.resize(n_trg);
@@ -467,17 +499,10 @@ void FmmEvaluator<K>::sorted_copies(std::size_t ns, const double *sxyz, const do
     sy_[i] = sxyz[3 * j + 1];
     sz_[i] = sxyz[3 * j + 2];
     sq_[i] = sq[j];
-  }
-  if (dip_mu_) {
-    smx_.resize(ns);
-    smy_.resize(ns);
-    smz_.resize(ns);
-#pragma omp parallel for schedule(static)
-    for (std::size_t i = 0; i < ns; ++i) {
-      const std::size_t j = tree_.src_order[i];
-      smx_[i] = dip_mu_[3 * j];
-      smy_[i] = dip_mu_[3 * j + 1];
-      smz_[i] = dip_mu_[3 * j + 2];
+    if (mu) {
+      smx_[i] = mu[3 * j];
+      smy_[i] = mu[3 * j + 1];
+      smz_[i] = mu[3 * j + 2];
     }
   }
 #pragma omp parallel for schedule(static)
@@ -872,20 +897,12 @@ void FmmEvaluator<K>::dipole_evaluation(std::size_t n_src, const double *src_xyz
   if (hess) std::fill(hess, hess + 6 * n_trg, 0.0);
   if (n_trg == 0 || (!pot && !grad && !hess)) return;
   const double t = omp_get_wtime();
-  std::vector<double> kxyz, kq, &kmu = dip_kmu_;    // sources with a charge or a dipole
-  kmu.clear();
-  for (std::size_t j = 0; j < n_src; ++j) {
-    const double q = src_q ? src_q[j] : 0.0;
-    const double *m = src_mu ? src_mu + 3 * j : nullptr;
-    if (q == 0.0 && (!m || (m[0] == 0.0 && m[1] == 0.0 && m[2] == 0.0))) continue;
-    kxyz.insert(kxyz.end(), src_xyz + 3 * j, src_xyz + 3 * j + 3);
-    kq.push_back(q);
-    for (int d = 0; d < 3; ++d) kmu.push_back(m ? m[d] : 0.0);
-  }
-  const std::size_t ns = kq.size();
+  std::vector<double> kxyz, kq;    // sources with a charge or a dipole (copies only when some have neither)
+  const double *sxyz = src_xyz, *sq = src_q, *smu = src_mu;
+  const std::size_t ns = nonzero_dipole_sources(n_src, sxyz, sq, smu, kxyz, kq, dip_kmu_);
   stats_.n_sources = ns;
   if (ns == 0) return;
-  dip_mu_ = src_mu ? kmu.data() : nullptr;
+  dip_mu_ = smu;
   hess_ = hess != nullptr;
   std::vector<double> g;
   double *gr = grad;
@@ -893,11 +910,10 @@ void FmmEvaluator<K>::dipole_evaluation(std::size_t n_src, const double *src_xyz
     g.resize(3 * n_trg);
     gr = g.data();
   }
-  const double *sxyz = kxyz.data();
   const bool same_arrays = src_xyz == trg_xyz && n_src == n_trg && ns == n_src;
   (this->*boundary_.wrap)(ns, sxyz, n_trg, trg_xyz);    // periodic: into the cell (moments unchanged)
-  if (grid_) evaluate_grid(ns, sxyz, kq.data(), n_trg, trg_xyz, pot, gr, same_arrays);
-  else evaluate_tree(t, ns, sxyz, kq.data(), n_trg, trg_xyz, pot, gr);
+  if (grid_) evaluate_grid(ns, sxyz, sq, n_trg, trg_xyz, pot, gr, same_arrays);
+  else evaluate_tree(t, ns, sxyz, sq, n_trg, trg_xyz, pot, gr);
   if (hess) {
 #pragma omp parallel for schedule(static)
     for (std::size_t i = 0; i < n_trg; ++i) {

@@ -171,8 +171,9 @@ template <class K> void FmmEvaluator<K>::periodic_root_operator()
 }
 
 // Laplace: the quadratic part quad sum_j q_j |x - y_j|^2 of the lattice sum (periodic.h), from
-// the moments of the sources about the cell center c (dipoles: mu_j . grad_y of that term) (sorted sources with input index below
-// own_sources; distributed: this rank's own, the moments are then summed over ranks)
+// the moments of the sources about the cell center c (sorted sources with input index below
+// own_sources; distributed: this rank's own, the moments are then summed over ranks); a dipole
+// adds mu_j . grad_y of that term
 template <class K>
 void FmmEvaluator<K>::periodic_background_moments(double quad, const double c[3], std::size_t own_sources)
 {

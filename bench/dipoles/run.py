@@ -27,6 +27,9 @@ import subprocess
 import sys
 import tempfile
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from matched_error import time_at  # noqa: E402
+
 SPACING, JITTER, MU = 1.25, 0.15, 0.8
 KIFMM = ["1e-3", "1e-5", "1e-7"]
 EWALD_DISP = [("1e-3", 3), ("1e-4", 3), ("1e-5", 4), ("1e-6", 4)]    # accuracy, real-space cutoff in spacings
@@ -97,15 +100,6 @@ def rel_error(f, ref, cols):
     num = sum((f[i][c] - ref[i][c]) ** 2 for i in ref for c in cols)
     den = sum(ref[i][c] ** 2 for i in ref for c in cols)
     return math.sqrt(num / den)
-
-
-def time_at(err, pts):
-    pts = sorted((e, t) for e, t in pts if e is not None and t is not None)
-    for (e1, t1), (e2, t2) in zip(pts, pts[1:]):
-        if e1 <= err <= e2:
-            w = (math.log(err) - math.log(e1)) / (math.log(e2) - math.log(e1)) if e2 > e1 else 0
-            return math.exp(math.log(t1) + w * (math.log(t2) - math.log(t1)))
-    return None
 
 
 def main():

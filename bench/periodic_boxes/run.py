@@ -26,6 +26,9 @@ import sys
 import tempfile
 import time
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from matched_error import time_at  # noqa: E402
+
 CASES = {
     # name: (lx, ly, lz, boundary, distribution)
     "box_2x1x1": (2.0, 1.0, 1.0, "p p p", "uniform"),
@@ -100,16 +103,6 @@ def rel_error(f, ref):
     return math.sqrt(num / den)
 
 
-def pppm_time_at(err, pppm):
-    """pppm's time per step at this error, log-log interpolated between its settings."""
-    pts = sorted((e, t) for e, t in pppm if e is not None)
-    for (e1, t1), (e2, t2) in zip(pts, pts[1:]):
-        if e1 <= err <= e2:
-            w = (math.log(err) - math.log(e1)) / (math.log(e2) - math.log(e1)) if e2 > e1 else 0
-            return math.exp(math.log(t1) + w * (math.log(t2) - math.log(t1)))
-    return None
-
-
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--lmp", required=True)
@@ -137,7 +130,7 @@ def main():
             for acc in KIFMM:
                 t, f = run(a.lmp, work, case, n, "kifmm", acc, a.steps)
                 e = rel_error(f, ref) if f else None
-                tp = pppm_time_at(e, pppm) if e else None
+                tp = time_at(e, pppm) if e else None
                 rows.append(("kifmm", acc, e, t, f"{t / tp:.2f}" if tp and t else "-"))
             lx, ly, lz, bnd, _ = CASES[case]
             for s, acc, e, t, r in rows:

@@ -552,32 +552,22 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   // reduction over ranks), as in the KSPACE styles
   if (eflag_global || keep) MPI_Allreduce(&e_local, &energy, 1, MPI_DOUBLE, MPI_SUM, world);
   if (vflag_global || keep) MPI_Allreduce(v_local, virial, 6, MPI_DOUBLE, MPI_SUM, world);
-  const bool tensor = periodic_tensor() && !dipoles;
-  // slabs and periodic yukawa: no dipole virial (as for periodic yukawa charges)
-  const bool no_dipole_virial = dipoles && (slab || (periodic && kset.kernel == LongRangeKernel::Yukawa));
-  if (no_dipole_virial && vflag_atom)
-    error->all(FLERR, "kspace_style kifmm: the per-atom virial (compute stress/atom) of point dipoles in a slab "
-               "(boundary p p f) or with periodic yukawa is not available in this version");
-  if (no_dipole_virial && (vflag_global || keep)) {
-    for (double &v : virial) v = 0.0;
-    if (!warned_periodic_virial && comm->me == 0)
-      error->warning(FLERR, "kspace_style kifmm: the virial of point dipoles in a slab (boundary p p f) or with "
-                     "periodic yukawa is not computed (0); the pressure has no long-range part");
-    warned_periodic_virial = true;
-  } else if (dipoles && (periodic || vflag_atom) && (vflag_global || keep || vflag_atom))
-    dipole_virial(cf, periodic && (vflag_global || keep), vflag_atom);    // kspace_kifmm_dipoles.cpp
-  if (periodic && !tensor && !dipoles && (vflag_global || keep)) periodic_virial(e_local);
-  if (vflag_atom && periodic && !tensor && !dipoles)
-    error->all(FLERR, "kspace_style kifmm: per-atom virial (compute stress/atom) with periodic boundaries "
-               "needs boundary p p p, kernel coulomb or gravity and 'kspace_modify pressure/scalar no' "
-               "(the default there)");
-  if (tensor && (vflag_global || keep || vflag_atom)) periodic_tensor_virial(cf, vflag_global || keep, vflag_atom);
-  if (action == Stride::Evaluate) schedule->end_evaluation(energy, virial);
-
-  if (vflag_atom && !periodic && !dipoles && nsrc > 0) {
-    double center[3] = {0, 0, 0};
-    per_atom_virial(cf, center);
+  if (dipoles) {
+    if (vflag_global || keep || vflag_atom) dipole_virial(cf, vflag_global || keep, vflag_atom);
+  } else {
+    const bool tensor = periodic_tensor();
+    if (periodic && !tensor && (vflag_global || keep)) periodic_virial(e_local);
+    if (vflag_atom && periodic && !tensor)
+      error->all(FLERR, "kspace_style kifmm: per-atom virial (compute stress/atom) with periodic boundaries "
+                 "needs boundary p p p, kernel coulomb or gravity and 'kspace_modify pressure/scalar no' "
+                 "(the default there)");
+    if (tensor && (vflag_global || keep || vflag_atom)) periodic_tensor_virial(cf, vflag_global || keep, vflag_atom);
+    if (vflag_atom && !periodic && nsrc > 0) {
+      double center[3] = {0, 0, 0};
+      per_atom_virial(cf, center);
+    }
   }
+  if (action == Stride::Evaluate) schedule->end_evaluation(energy, virial);
 
   run_timing.add(phases, comm_time, MPI_Wtime() - t_start, n,
                  distributed() ? engine->stats().comm_bytes : 0);

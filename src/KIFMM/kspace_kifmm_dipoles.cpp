@@ -128,12 +128,26 @@ double KSpaceKIFMM::point_energy(std::size_t k, double ce) const
   return 0.5 * ce * e;
 }
 
-// Virial of charges and dipoles, global (virial[6]) and/or per atom (vatom): 1/2 sum over
-// pairs (and images) of (x_i - x_j)_a F_ij,b (kifmm::dipole_point_virial, periodic:
+// Virial of charges and dipoles, global (virial[6]; open boundaries: the sum of x_i F_i that
+// compute() made) and/or per atom (vatom): 1/2 sum over pairs (and images) of (x_i - x_j)_a F_ij,b (kifmm::dipole_point_virial, periodic:
 // kifmm::periodic_dipole_point_virial on the single-level grid). The torques make it
 // unsymmetric; xy is r_x F_y as pair lj/cut/dipole/cut tallies it.
 void KSpaceKIFMM::dipole_virial(double cf, bool global, bool peratom)
 {
+  // slabs and periodic yukawa: no dipole virial (as for periodic yukawa charges)
+  if (slab || (periodic && kset.kernel == LongRangeKernel::Yukawa)) {
+    if (peratom)
+      error->all(FLERR, "kspace_style kifmm: the per-atom virial (compute stress/atom) of point dipoles in a slab "
+                 "(boundary p p f) or with periodic yukawa is not available in this version");
+    for (double &v : virial) v = 0.0;
+    if (!warned_periodic_virial && comm->me == 0)
+      error->warning(FLERR, "kspace_style kifmm: the virial of point dipoles in a slab (boundary p p f) or with "
+                     "periodic yukawa is not computed (0); the pressure has no long-range part");
+    warned_periodic_virial = true;
+    return;
+  }
+  global = global && periodic;    // open boundaries: sum_i x_i F_i, already in virial
+  if (!global && !peratom) return;
   const std::size_t n = index.size();
   std::vector<double> w(6 * n);
   const DipoleSources s = dipole_sources();

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -341,6 +342,33 @@ OrderFound raise_order(OrderTrials &trials, OrderFound at, double request, int m
 // time. Each trial is the caller's evaluation at that order: on the tree the caller chooses for
 // it.
 OrderFound search_order(OrderTrials &trials, OrderFound start, double request, int min_order, int max_order);
+
+// ---- induced point dipoles (polarization.cpp)
+
+// Point polarizabilities alpha_i >= 0 at n points take the dipoles
+//   mu_i = alpha_i (e0_i + e_i(mu)),      e_i(mu) = -grad phi of all the dipoles mu at x_i
+// (the field of the other points: pairs at r = 0 are excluded, as in every evaluation), e0 the
+// field of everything else (charges, permanent dipoles, an external field). For alpha_i > 0 this
+// is the symmetric linear system  mu_i / alpha_i - e_i(mu) = e0_i  (points with alpha_i = 0 keep
+// mu_i = 0), positive definite unless the polarizabilities are too large for the distances
+// between the points (the polarization catastrophe of point dipoles). Solved by conjugate
+// gradients preconditioned with alpha (Jacobi), from the start guess in mu, to
+//   residual = sqrt(sum_i alpha_i |r_i|^2 / sum_i alpha_i |e0_i|^2) <= tolerance,
+// r = e0 - (mu / alpha - e(mu)) the residual field.
+// field(mu, e): e = -grad phi of the dipoles mu (3 per point) at the n points: the caller's
+// evaluation (one process or, each process its own points, several). sum(x): x summed over the
+// processes (x itself on one). Collective when the evaluation is.
+struct PolarizationSolve {
+  int iterations = 0;     // conjugate-gradient steps
+  int evaluations = 0;    // calls of field()
+  double residual = 0;    // relative residual of the returned mu (as above)
+  bool converged = false;
+  bool indefinite = false;    // a direction of non-positive curvature: the system has no minimum
+};
+PolarizationSolve solve_induced_dipoles(std::size_t n, const double *alpha, const double *e0,
+                                        const std::function<void(const double *mu, double *e)> &field,
+                                        const std::function<double(double)> &sum, double tolerance,
+                                        int max_iterations, double *mu);
 }    // namespace kifmm
 
 namespace kifmm {

@@ -505,6 +505,7 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
 
   if (periodic) periodic_cell();    // the box is the cell (it may have changed)
   if (tree_choice_pending) choose_tree_from_atoms();
+  if (polarization) polarize_points();    // induced dipoles first (kspace_kifmm_polarize.cpp)
   const bool want_potential = eflag_global || eflag_atom || keep || (periodic && vflag_global);
   prepare_rigid_bodies();
   double comm_time = 0;

@@ -76,6 +76,12 @@ class KSpaceKIFMM : public KSpace {
   void point_force(std::size_t k, double prefactor, double f[3], double t[3]) const;
   double point_energy(std::size_t k, double prefactor) const;
   void dipole_virial(double prefactor, bool global, bool peratom);
+  // induced dipoles (fix kifmm/polarize, KIFMMPolarization; kspace_kifmm_polarize.cpp): solved
+  // before each evaluation, written into moment and atom->mu
+  class KIFMMPolarization *polarization = nullptr;
+  void find_polarization();
+  void polarize_points();
+  std::vector<double> gathered_pol_xyz, gathered_pol_mu;    // several ranks: the polarizable points of all
   // more than one rank: distributed evaluation over this communicator (world), open or
   // periodic boundaries; one rank uses the serial evaluate() (with its mutual near field)
   std::unique_ptr<kifmm::Communicator> kcomm;

@@ -1,6 +1,6 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Point dipoles in kspace_style kifmm (atoms with a dipole moment mu: atom_style dipole,
-// hybrid sphere dipole): the engine's evaluate_dipoles gives at every atom the potential phi of
+// hybrid sphere dipole; induced ones of fix kifmm/polarize): the engine's evaluate_dipoles gives at every atom the potential phi of
 // all charges and dipoles, its gradient g and its second derivatives h; then
 //   F_i   = -qqrd2e (q_i g_i + h_i mu_i)        (q E + (mu . grad) E)
 //   tau_i = -qqrd2e mu_i x g_i                  (mu x E)
@@ -10,6 +10,8 @@
 // atoms against the sources of all ranks (gathered). The measured error covers forces and
 // torques (sampled against the exact sum; periodic: an Ewald sum).
 #include "kspace_kifmm.h"
+
+#include "kifmm_polarization.h"
 
 #include "atom.h"
 #include "comm.h"
@@ -40,16 +42,18 @@ void dipole_force_torque(double q, const double *mu, const double *g, const doub
 }
 }    // namespace
 
-// Dipole mode when the atom style has dipole moments and some atom's is not zero. Checked at
+// Dipole mode when the atom style has dipole moments and some atom's is not zero, or a fix gives
+// atoms induced dipoles (fix kifmm/polarize). Checked at
 // init: what the dipole sum does not cover yet is an error naming it.
 void KSpaceKIFMM::dipole_init()
 {
   dipoles = false;
+  find_polarization();    // fix kifmm/polarize: induced dipoles
   if (!atom->mu_flag) return;
   int mine = 0, any = 0;
   for (int i = 0; i < atom->nlocal && !mine; ++i) mine = has_moment(atom->mu[i]);
   MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_MAX, world);
-  if (!any) return;
+  if (!any && !polarization) return;
   dipoles = true;
   if (kset.kernel == LongRangeKernel::Gravity)
     error->all(FLERR, "kspace_style kifmm kernel gravity has no dipoles: the atoms have dipole moments (mu); "
@@ -67,7 +71,7 @@ void KSpaceKIFMM::dipole_init()
 
 bool KSpaceKIFMM::is_point(int i) const
 {
-  return strength_of(i) != 0.0 || (dipoles && has_moment(atom->mu[i]));
+  return strength_of(i) != 0.0 || (dipoles && (has_moment(atom->mu[i]) || (polarization && polarization->polarizable(i))));
 }
 
 // The sources of a dipole evaluation: this rank's points on one rank; on several, the points of

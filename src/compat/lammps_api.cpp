@@ -3,6 +3,7 @@
 
 #include "atom.h"
 #include "comm.h"
+#include "force.h"
 #include "lammps.h"
 
 #include <algorithm>
@@ -141,6 +142,31 @@ bool molecule_members_ok(Molecule **mols, int nmolecule_left, const std::string 
   }
   return true;
 #endif
+}
+
+std::string efield_constant_field(LAMMPS *lmp, Fix *efield, double e[3])
+{
+  e[0] = e[1] = e[2] = 0.0;
+  if (strcmp(efield->style, "efield") != 0) return std::string("fix ") + efield->id + " is not a fix efield";
+#if KIFMM_LAMMPS_TREE
+  using E = detail::EfieldMembers;
+  const auto *f = static_cast<const FixEfield *>(efield);
+  if (E::get_qe2f(f) != lmp->force->qe2f)
+    return "the FixEfield class of this LAMMPS does not match the one the package was built for";
+  if (!E::get_constant(f)) return "its field is given by variables";
+  if (E::get_region(f)) return "it acts in a region only";
+  E::get_field(f, e);
+#else
+  const auto *f = reinterpret_cast<const EfieldLayout *>(efield);
+  if (f->qe2f != lmp->force->qe2f)
+    return "the FixEfield class of this LAMMPS does not match the one the package was built for";
+  if (f->xstr || f->ystr || f->zstr) return "its field is given by variables";
+  if (f->idregion || f->iregion != -1) return "it acts in a region only";
+  e[0] = f->ex;
+  e[1] = f->ey;
+  e[2] = f->ez;
+#endif
+  return "";
 }
 
 }    // namespace kifmm_lammps

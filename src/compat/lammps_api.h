@@ -19,8 +19,10 @@
 
 #if KIFMM_LAMMPS_TREE
 #include "RIGID/fix_rigid_small.h"
+#include "fix_efield.h"
 #include "molecule.h"
 #else
+#include "efield_layout.h"
 #include "molecule_layout.h"
 #include "rigid_small_layout.h"
 #endif
@@ -56,6 +58,24 @@ class RigidSmallMembers : public LAMMPS_NS::FixRigidSmall {
   static const char *get_inpfile(const F *f) { return f->*(&RigidSmallMembers::inpfile); }
   static int get_langflag(const F *f) { return f->*(&RigidSmallMembers::langflag); }
   static double **get_langextra(const F *f) { return f->*(&RigidSmallMembers::langextra); }
+};
+// FixEfield keeps its field in protected members: the same way as for FixRigidSmall.
+class EfieldMembers : public LAMMPS_NS::FixEfield {
+ public:
+  using F = LAMMPS_NS::FixEfield;
+  static const double *get_field(const F *f, double e[3])
+  {
+    e[0] = f->*(&EfieldMembers::ex);
+    e[1] = f->*(&EfieldMembers::ey);
+    e[2] = f->*(&EfieldMembers::ez);
+    return e;
+  }
+  static bool get_constant(const F *f)
+  {
+    return !(f->*(&EfieldMembers::xstr)) && !(f->*(&EfieldMembers::ystr)) && !(f->*(&EfieldMembers::zstr));
+  }
+  static bool get_region(const F *f) { return f->*(&EfieldMembers::idregion) != nullptr; }
+  static double get_qe2f(const F *f) { return f->*(&EfieldMembers::qe2f); }
 };
 }    // namespace detail
 #endif
@@ -102,6 +122,11 @@ class RigidSmallAccess {
 // the first half-step of a run: LAMMPS 29 Sep 2021 leaves it out, current LAMMPS puts it in.
 // fix clump/rigid measures it at every run; this is what it assumes when it cannot.
 constexpr bool rigid_small_setup_has_gravity = KIFMM_LAMMPS_DATE > 20210929;
+
+// The uniform, constant field of a fix efield (style efield): e = its Ex Ey Ez times qe2f
+// (force per charge, as the fix applies them). Empty when read, else why not (a field given by
+// variables, a region; Debian's: a class layout that does not match). Not collective.
+std::string efield_constant_field(LAMMPS_NS::LAMMPS *lmp, LAMMPS_NS::Fix *efield, double e[3]);
 
 // Molecule templates: true when the members of Molecule can be used as declared (always with
 // a tree's molecule.h; Debian's: the declared layout is checked on the templates `mols[0..nset)`

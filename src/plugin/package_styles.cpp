@@ -3,6 +3,7 @@
 
 #include "style_maps.h"
 
+#include "fix_kifmm_polarize.h"
 #include "fix_kifmm_stride.h"
 #include "fix_clump_rigid.h"
 #include "kifmm_timing.h"
@@ -29,6 +30,10 @@ void *make_fix_kifmm_stride(void *lmp, int narg, char **arg)
 {
   return new FixKIFMMStride(static_cast<LAMMPS *>(lmp), narg, arg);
 }
+void *make_fix_kifmm_polarize(void *lmp, int narg, char **arg)
+{
+  return new FixKIFMMPolarize(static_cast<LAMMPS *>(lmp), narg, arg);
+}
 void *make_fix_clump_rigid(void *lmp, int narg, char **arg)
 {
   return new FixClumpRigid(static_cast<LAMMPS *>(lmp), narg, arg);
@@ -37,8 +42,8 @@ void *make_fix_clump_rigid(void *lmp, int narg, char **arg)
 
 const std::vector<lammpsplugin_t> &package_styles()
 {
-  // Styles are added here as they are implemented (kspace kifmm, fix kifmm/stride,
-  // fix clump/rigid); see src/KIFMM and src/RIGID_CLUMP.
+  // The package's styles (kspace kifmm, fix kifmm/stride, fix kifmm/polarize, fix clump/rigid);
+  // see src/KIFMM and src/RIGID_CLUMP.
   static const std::vector<lammpsplugin_t> styles = [] {
     std::vector<lammpsplugin_t> v;
     auto add = [&](const char *kind, const char *name, const char *info) -> lammpsplugin_t & {
@@ -58,6 +63,8 @@ const std::vector<lammpsplugin_t> &package_styles()
         .creator.v2 = &make_fix_kifmm_timing;
     add("fix", "kifmm/stride", "long-range forces of kspace kifmm refreshed every N steps")
         .creator.v2 = &make_fix_kifmm_stride;
+    add("fix", "kifmm/polarize", "induced point dipoles of polarizable atoms, solved by kspace kifmm")
+        .creator.v2 = &make_fix_kifmm_polarize;
     add("fix", "clump/rigid", "rigid clumps of spherical pebbles (union mass, wraps rigid/small)")
         .creator.v2 = &make_fix_clump_rigid;
     return v;

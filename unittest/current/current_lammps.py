@@ -12,6 +12,9 @@ cases:
   dipoles  point dipoles (atom_style hybrid sphere dipole, charges and moments from atom-style
            variables, explicit order and leaf, fix nve/sphere update dipole, 20 steps): forces
            and torques at steps 0, 10, 20 equal those of --reference (lmp_kifmm) to 1e-12
+  polarize the dipole input with induced dipoles on half of the atoms (fix kifmm/polarize, the
+           external field of fix efield): forces, torques and induced dipoles at steps 0, 10,
+           20 equal those of --reference (lmp_kifmm) to 1e-10
   mpi      the same input on 2 ranks (--mpirun) equals 1 rank to 1e-10
   clumps   fix clump/rigid with a molecule template, fix pour (rigid keyword) and the gravity
            keyword, charged pebbles under kspace kifmm: 5 clumps inserted with the union mass,
@@ -95,6 +98,17 @@ dump_modify d format float %.17g sort id
 run 20
 print "ELONG $(elong:%.17g)"
 """
+
+# the dipole input with induced dipoles on the atoms of IDs up to 170 (no permanent moment)
+POLARIZE_INPUT = (DIPOLE_INPUT
+                  .replace("pair_style zero 1.0\n",
+                           "group pol id <= 170\nset group pol dipole 0 0 0\nset group pol charge 0.0\n"
+                           "fix ef all efield 0.1 -0.05 0.3\nfix_modify ef energy yes\n"
+                           "fix pol pol kifmm/polarize alpha 0.05 tol 1e-12\nfix_modify pol energy yes\n"
+                           "pair_style zero 1.0\n")
+                  .replace("fix nve all nve/sphere update dipole", "fix nve all nve/sphere")
+                  .replace("thermo_style custom step pe elong ke", "thermo_style custom step pe elong ke f_pol f_pol[1]")
+                  .replace("fx fy fz tqx tqy tqz", "fx fy fz tqx tqy tqz mux muy muz"))
 
 CLUMP_INPUT = """\
 units si
@@ -239,10 +253,10 @@ def compare(a, b, tol, what):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("case", choices=["kspace", "dipoles", "mpi", "clumps", "restart", "clumps-mpi", "python"])
+    ap.add_argument("case", choices=["kspace", "dipoles", "polarize", "mpi", "clumps", "restart", "clumps-mpi", "python"])
     ap.add_argument("--lmp", required=True)
     ap.add_argument("--plugin", required=True)
-    ap.add_argument("--reference", help="lmp_kifmm (kspace, dipoles)")
+    ap.add_argument("--reference", help="lmp_kifmm (kspace, dipoles, polarize)")
     ap.add_argument("--mpirun", nargs="+", help="mpirun command and its options (mpi)")
     ap.add_argument("--potentials", help="the package's potentials/ (clumps, restart)")
     ap.add_argument("--pythonpath", help="that LAMMPS's python/ directory (python)")
@@ -262,6 +276,17 @@ def main():
             if sorted(steps) != [0, 10, 20] or any(len(r) != 9 for rows in steps.values() for r in rows.values()):
                 sys.exit("dipoles: the reference dumps lack steps or torque columns")
             compare(read_dumps(d1), steps, 1e-12, "dipoles: plugin in current LAMMPS vs lmp_kifmm")
+        elif a.case == "polarize":
+            d1, _ = kspace_dir([a.lmp], plugin, work, "current", POLARIZE_INPUT)
+            d2, _ = kspace_dir([a.reference], None, work, "reference", POLARIZE_INPUT)
+            steps = read_dumps(d2)
+            if sorted(steps) != [0, 10, 20] or any(len(r) != 12 for rows in steps.values() for r in rows.values()):
+                sys.exit("polarize: the reference dumps lack steps or dipole columns")
+            induced = sum(1 for i, r in steps[20].items() if i <= 170 and abs(r[9]) + abs(r[10]) + abs(r[11]) > 0)
+            print(f"polarize: {induced} atoms with induced dipoles at step 20")
+            if induced != 170:
+                sys.exit("polarize: the reference has no induced dipoles on the polarizable atoms")
+            compare(read_dumps(d1), steps, 1e-10, "polarize: plugin in current LAMMPS vs lmp_kifmm")
         elif a.case == "mpi":
             d1, _ = kspace_dir([a.lmp], plugin, work, "np1")
             d2, out = kspace_dir(a.mpirun + ["-np", "2", a.lmp], plugin, work, "np2")

@@ -226,12 +226,15 @@ FixKIFMMStride::Action FixKIFMMStride::plan(bool want_global, bool want_peratom,
 void FixKIFMMStride::add_held_forces()
 {
   double **f = atom->f;
+  double **torque = atom->torque_flag ? atom->torque : nullptr;
   for (int i = 0; i < atom->nlocal; ++i) {
     const double *c = cache[i];
     if (c[VALID] == 0.0) continue;
     f[i][0] += c[F];
     f[i][1] += c[F + 1];
     f[i][2] += c[F + 2];
+    if (torque)    // point dipoles: the held torque (zero without dipoles)
+      for (int d = 0; d < 3; ++d) torque[i][d] += c[T + d];
   }
 }
 
@@ -239,7 +242,7 @@ void FixKIFMMStride::begin_evaluation()
 {
   // atoms of zero strength get no long-range force: cached zero, valid
   for (int i = 0; i < atom->nlocal; ++i) {
-    cache[i][F] = cache[i][F + 1] = cache[i][F + 2] = 0.0;
+    for (int d = 0; d < 3; ++d) cache[i][F + d] = cache[i][T + d] = 0.0;
     cache[i][VALID] = 1.0;
   }
 }
@@ -371,9 +374,11 @@ void FixKIFMMStride::unpack_restart(int nlocal, int nth)
   double **extra = atom->extra;
   int m = 0;
   for (int k = 0; k < nth; ++k) m += static_cast<int>(extra[nlocal][m]);
-  if (static_cast<int>(extra[nlocal][m]) != NCOL + 1)
+  const int size = static_cast<int>(extra[nlocal][m]);
+  if (size != NCOL + 1 && size != NCOL_FORCES + 1)
     error->one(FLERR, "fix kifmm/stride: per-atom restart data of unexpected size");
-  memcpy(cache[nlocal], &extra[nlocal][m + 1], NCOL * sizeof(double));
+  set_arrays(nlocal);    // a file without held torques: none held
+  memcpy(cache[nlocal], &extra[nlocal][m + 1], (size - 1) * sizeof(double));
 }
 
 int FixKIFMMStride::size_restart(int)

@@ -52,9 +52,11 @@ class FixKIFMMStride : public Fix, public KIFMMForceSchedule {
   // the skipped steps (energy every evaluates them when they are wanted)
   bool keeps_energy() const override { return !energy_every && (nevery > 1 || auto_mode); }
   void begin_evaluation() override;
-  void store(int i, const double *f, const double *x) override
+  void store(int i, const double *f, const double *t, const double *x) override
   {
     double *c = cache[i];
+    if (t)
+      for (int d = 0; d < 3; ++d) c[T + d] = t[d];
     if (measuring && c[X_REF] == c[X_REF]) {    // reference valid (not NaN)
       for (int d = 0; d < 3; ++d) {
         const double df = f[d] - c[F_REF + d], dx = x[d] - c[X_REF + d];
@@ -73,8 +75,9 @@ class FixKIFMMStride : public Fix, public KIFMMForceSchedule {
   void end_evaluation(double energy, const double *virial) override;
 
  private:
-  // per-atom columns: held force, valid flag, reference position and force of the k_LR probe
-  enum { F = 0, VALID = 3, X_REF = 4, F_REF = 7, NCOL = 10 };
+  // per-atom columns: held force, valid flag, reference position and force of the k_LR probe,
+  // held torque (point dipoles); restart files without the torque have NCOL_FORCES columns
+  enum { F = 0, VALID = 3, X_REF = 4, F_REF = 7, T = 10, NCOL = 13, NCOL_FORCES = 10 };
   double **cache = nullptr;
 
   Mode mode = Mode::Hold;

@@ -34,10 +34,11 @@ class KIFMMForceSchedule {
   virtual double force_scale(Action a) const = 0;
   // energy and virial are wanted on every evaluation (reported on the skipped steps)
   virtual bool keeps_energy() const = 0;
-  // an Evaluate call: begin, the long-range force f of every local atom i at position x
-  // (before force_scale()), end with the evaluated energy and virial
+  // an Evaluate call: begin, the long-range force f and torque t (null: none, no dipoles) of
+  // every local atom i at position x (before force_scale()), end with the evaluated energy and
+  // virial
   virtual void begin_evaluation() = 0;
-  virtual void store(int i, const double *f, const double *x) = 0;
+  virtual void store(int i, const double *f, const double *t, const double *x) = 0;
   virtual void end_evaluation(double energy, const double *virial) = 0;
 };
 

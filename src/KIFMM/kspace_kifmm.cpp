@@ -475,7 +475,7 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   Stride action = Stride::Plain;
   if (schedule) {
     action = schedule->plan(eflag_global || vflag_global, eflag_atom || vflag_atom, vflag_global,
-                            energy, virial, [this](int i) { return strength_of(i) != 0.0; });
+                            energy, virial, [this](int i) { return is_point(i); });
     if (action == Stride::Skip) return;
   }
   const bool keep = action == Stride::Evaluate && schedule->keeps_energy();
@@ -505,7 +505,9 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
 
   if (periodic) periodic_cell();    // the box is the cell (it may have changed)
   if (tree_choice_pending) choose_tree_from_atoms();
-  if (polarization) polarize_points();    // induced dipoles first (kspace_kifmm_polarize.cpp)
+  // induced dipoles first (kspace_kifmm_polarize.cpp); an energy-only evaluation of fix
+  // kifmm/stride takes the dipoles of its last evaluation, with its held forces
+  if (polarization && action != Stride::EnergyOnly) polarize_points();
   const bool want_potential = eflag_global || eflag_atom || keep || (periodic && vflag_global);
   prepare_rigid_bodies();
   double comm_time = 0;
@@ -532,7 +534,7 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
       if (dipoles)
         for (int d = 0; d < 3; ++d) atom->torque[i][d] += fscale * tk[d];
     }
-    if (action == Stride::Evaluate) schedule->store(i, fk, &xyz[3 * k]);
+    if (action == Stride::Evaluate) schedule->store(i, fk, dipoles ? tk : nullptr, &xyz[3 * k]);
     if (want_potential) {
       const double e = point_energy(k, ce);
       e_local += e;

@@ -61,9 +61,6 @@ void KSpaceKIFMM::dipole_init()
   if (!atom->torque_flag)
     error->all(FLERR, "kspace_style kifmm: atoms with dipole moments need atom attribute torque "
                       "(atom_style hybrid sphere dipole)");
-  if (schedule)
-    error->all(FLERR, "fix kifmm/stride does not support point dipoles (atoms with a dipole moment mu) in "
-                      "this version");
   if (!bodies.empty())
     error->all(FLERR, "kspace_style kifmm: point dipoles (atoms with a dipole moment mu) in rigid clumps "
                       "(fix clump/rigid) are not supported in this version");

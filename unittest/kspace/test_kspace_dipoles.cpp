@@ -3,7 +3,7 @@
 // same physics: pair lj/cut/dipole/cut with epsilon 0 and a Coulomb cutoff beyond the box
 // (charge-charge, charge-dipole and dipole-dipole terms). Forces, torques, energy, pressure
 // tensor, the order chosen for a requested accuracy, energy conservation under fix nve/sphere
-// update dipole, and the clear errors of what the dipole sum does not cover. Under mpiexec the
+// update dipole, fix kifmm/stride's held forces and torques, and the clear errors of what the dipole sum does not cover. Under mpiexec the
 // same comparisons hold on several ranks.
 #include "kspace_kifmm.h"
 #include "lammps_fixture.h"
@@ -340,11 +340,44 @@ TEST_F(KSpaceDipoleErrors, AtomStyleWithoutTorqueIsAnError)
   EXPECT_LAMMPS_ERROR(command("run 0"), "need atom attribute torque");
 }
 
-TEST_F(KSpaceDipoleErrors, StrideFixIsAnError)
+// fix kifmm/stride with point dipoles: N = 1 is the run without the fix bit for bit; hold keeps
+// the forces and torques of the last evaluation; impulse gives N times both, then none
+TEST_F(KSpaceDipoles, StrideOneIsBitForBitTheRunWithoutIt)
 {
-  spheres(3);
-  commands("pair_style zero 1.0\npair_coeff * *\nkspace_style kifmm 1e-4\nfix s all kifmm/stride 2");
-  EXPECT_LAMMPS_ERROR(command("run 0"), "fix kifmm/stride does not support point dipoles");
+  auto trajectory = [&](const std::string &fix) {
+    create();
+    spheres(5);
+    commands("pair_style soft 1.0\npair_coeff * * 10.0\nkspace_style kifmm 1e-5\n"
+             "velocity all create 0.5 777 loop geom\nfix nve all nve/sphere update dipole\ntimestep 0.002");
+    if (!fix.empty()) command(fix);
+    command("run 20 post no");
+    return std::make_tuple(positions_by_id(), torques_by_id(), thermo("elong"));
+  };
+  const auto [x0, t0, e0] = trajectory("");
+  const auto [x1, t1, e1] = trajectory("fix st all kifmm/stride 1");
+  EXPECT_EQ(relative_force_error(x1, x0), 0.0);
+  EXPECT_EQ(relative_force_error(t1, t0), 0.0);
+  EXPECT_EQ(e1, e0);
+}
+
+TEST_F(KSpaceDipoles, StrideHoldsForcesAndTorques)
+{
+  spheres(5);
+  commands("pair_style zero 1.0\npair_coeff * *\nkspace_style kifmm 1e-5\nfix st all kifmm/stride 5\n"
+           "run 0 post no");
+  const auto f0 = forces_by_id(), t0 = torques_by_id();
+  double tnorm = 0;
+  for (const auto &[id, t] : t0) tnorm += t[0] * t[0] + t[1] * t[1] + t[2] * t[2];
+  ASSERT_GT(tnorm, 0.0);
+  command("run 3 post no");    // no integrator: the same atoms, the held values
+  EXPECT_EQ(relative_force_error(forces_by_id(), f0), 0.0);
+  EXPECT_EQ(relative_force_error(torques_by_id(), t0), 0.0);
+  commands("unfix st\nreset_timestep 0\nfix st all kifmm/stride 5 mode impulse\nrun 0 post no");
+  for (const auto &[id, t] : torques_by_id())
+    for (int d = 0; d < 3; ++d) ASSERT_NEAR(t[d], 5.0 * t0.at(id)[d], 1e-12 * std::sqrt(tnorm)) << id;
+  command("run 3 post no");
+  for (const auto &[id, t] : torques_by_id())
+    for (int d = 0; d < 3; ++d) ASSERT_EQ(t[d], 0.0) << id;
 }
 
 

@@ -219,6 +219,31 @@ TEST_F(Polarize, PeriodicForcesAreTheEnergyDerivative)
   expect_forces_are_energy_derivative(*this, {64});
 }
 
+// with fix kifmm/stride the dipoles are solved on evaluation steps only: N = 1 is the run
+// without the fix bit for bit; with N = 3 the dipoles between evaluations are the last ones
+TEST_F(Polarize, StrideSolvesOnEvaluationSteps)
+{
+  auto trajectory = [&](const std::string &fix, int steps) {
+    create();
+    spheres(4);
+    polarize("1e-6", "permittivity 10 tol 1e-8");
+    commands("pair_style soft 1.0\npair_coeff * * 10.0\nvelocity all create 0.3 777 loop geom\n"
+             "fix nve all nve/sphere\ntimestep 0.002");
+    if (!fix.empty()) command(fix);
+    command("run " + std::to_string(steps) + " post no");
+    return std::make_pair(positions_by_id(), dipoles());
+  };
+  const auto [x0, mu0] = trajectory("", 12);
+  const auto [x1, mu1] = trajectory("fix st all kifmm/stride 1", 12);
+  EXPECT_EQ(relative_force_error(x1, x0), 0.0);
+  EXPECT_EQ(relative_force_error(mu1, mu0), 0.0);
+  const auto [x3, mu3] = trajectory("fix st all kifmm/stride 3", 3);    // evaluated at step 3
+  const auto [x4, mu4] = trajectory("fix st all kifmm/stride 3", 5);    // held at 4 and 5
+  EXPECT_GT(relative_force_error(x4, x3), 1e-6);
+  EXPECT_EQ(relative_force_error(mu4, mu3), 0.0);
+  EXPECT_GT(relative_force_error(mu3, trajectory("fix st all kifmm/stride 3", 2).second), 1e-8);
+}
+
 using PolarizeErrors = Polarize;
 
 TEST_F(PolarizeErrors, NeedsKspaceKifmm)

@@ -16,27 +16,12 @@ usage: python3 chains.py [OUTDIR] [--d D] [--H H] [--dt DT] [--contact C]
 import argparse
 import math
 import os
+import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
+import kifmm_dumps  # noqa: E402
 
 COS30 = math.cos(math.radians(30.0))
-
-
-def frames(path):
-    """(step, box lengths, positions) of every frame of a dump with columns id x y z ..."""
-    with open(path) as f:
-        lines = f.read().splitlines()
-    i = 0
-    while i < len(lines):
-        if not lines[i].startswith("ITEM: TIMESTEP"):
-            i += 1
-            continue
-        step = int(lines[i + 1])
-        n = int(lines[i + 3])
-        box = [[float(v) for v in lines[i + 5 + k].split()[:2]] for k in range(3)]
-        cols = lines[i + 8].split()[2:]
-        ix = cols.index("x")
-        pts = [[float(v) for v in l.split()[ix:ix + 3]] for l in lines[i + 9:i + 9 + n]]
-        yield step, [b[1] - b[0] for b in box], pts
-        i += 9 + n
 
 
 def analyse(box, pts, d, H, contact):
@@ -91,7 +76,7 @@ def analyse(box, pts, d, H, contact):
 
 def table(outdir, d=1.0, H=8.0, dt=0.002, contact=1.1):
     rows = []
-    for step, box, pts in frames(os.path.join(outdir, "spheres.dump")):
+    for step, box, pts in kifmm_dumps.frames(os.path.join(outdir, "spheres.dump"), ("x", "y", "z")):
         if rows and abs(rows[-1][0] - step * dt) < 1e-12:
             continue    # the first frame of a run repeats the last of the one before
         rows.append((step * dt,) + analyse(box, pts, d, H, contact))

@@ -19,29 +19,12 @@ usage: python3 structures.py [OUTDIR] [--d D] [--dt DT] [--contact C]
 import argparse
 import math
 import os
+import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
+import kifmm_dumps  # noqa: E402
 
 HEAD_TO_TAIL = math.cos(math.radians(45.0))
-
-
-def frames(path):
-    """(step, rows id x y z mux muy muz) of every frame of the dump"""
-    with open(path) as f:
-        lines = f.read().splitlines()
-    i = 0
-    while i < len(lines):
-        if not lines[i].startswith("ITEM: TIMESTEP"):
-            i += 1
-            continue
-        step = int(lines[i + 1])
-        n = int(lines[i + 3])
-        cols = lines[i + 8].split()[2:]
-        idx = [cols.index(c) for c in ("x", "y", "z", "mux", "muy", "muz")]
-        rows = []
-        for l in lines[i + 9:i + 9 + n]:
-            v = l.split()
-            rows.append([float(v[k]) for k in idx])
-        yield step, rows
-        i += 9 + n
 
 
 def analyse(rows, d, contact):
@@ -102,7 +85,8 @@ def analyse(rows, d, contact):
 
 def table(outdir, d=1.0, dt=0.002, contact=1.1):
     out = []
-    for step, rows in frames(os.path.join(outdir, "spheres.dump")):
+    for step, _, rows in kifmm_dumps.frames(os.path.join(outdir, "spheres.dump"),
+                                            ("x", "y", "z", "mux", "muy", "muz")):
         if out and abs(out[-1][0] - step * dt) < 1e-12:
             continue    # the first frame of a run repeats the last of the one before
         out.append((step * dt,) + analyse(rows, d, contact))

@@ -27,9 +27,9 @@ def main():
     ap.add_argument("--rise", type=float, default=1e-4)
     ap.add_argument("--max-iterations", type=int, default=10)
     a = ap.parse_args()
-    example = os.path.dirname(os.path.abspath(a.outdir))
-    sys.path.insert(0, example)
-    import chains  # the example's own analysis (the copy of examples/dielectric-chains)
+    here = os.path.dirname(os.path.abspath(__file__))
+    sys.path.insert(0, os.path.join(here, "..", "..", "examples", "dielectric-chains"))
+    import chains  # the example's own analysis (examples/dielectric-chains/chains.py)
 
     ok = True
     rows = chains.table(a.outdir)

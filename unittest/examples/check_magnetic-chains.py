@@ -26,8 +26,9 @@ def main():
     ap.add_argument("--min-rings", type=int, default=1)
     ap.add_argument("--min-align", type=float, default=0.85)
     a = ap.parse_args()
-    sys.path.insert(0, os.path.dirname(os.path.abspath(a.outdir)))
-    import structures  # the example's own analysis (the copy of examples/magnetic-chains)
+    here = os.path.dirname(os.path.abspath(__file__))
+    sys.path.insert(0, os.path.join(here, "..", "..", "examples", "magnetic-chains"))
+    import structures  # the example's own analysis (examples/magnetic-chains/structures.py)
 
     rows = structures.table(a.outdir)
     first, last = rows[0], rows[-1]

@@ -47,6 +47,9 @@ FixKIFMMPolarize::FixKIFMMPolarize(LAMMPS *lmp, int narg, char **arg) : Fix(lmp,
     } else if (key == "tol") {
       tol = utils::numeric(FLERR, arg[iarg + 1], false, lmp);
       if (!(tol > 0 && tol < 1)) error->all(FLERR, "fix kifmm/polarize: tol {} must be in (0, 1)", val);
+    } else if (key == "predict") {
+      if (val != "yes" && val != "no") error->all(FLERR, "fix kifmm/polarize: predict must be yes or no, not '{}'", val);
+      predict = val == "yes";
     } else if (key == "maxiter") {
       maxiter = utils::inumeric(FLERR, arg[iarg + 1], false, lmp);
       if (maxiter < 1) error->all(FLERR, "fix kifmm/polarize: maxiter {} must be positive", val);
@@ -64,9 +67,18 @@ FixKIFMMPolarize::FixKIFMMPolarize(LAMMPS *lmp, int narg, char **arg) : Fix(lmp,
   size_vector = 3;
   extvector = 0;
   global_freq = 1;
+  create_attribute = 1;
+  maxexchange = NCOL;
+  grow_arrays(atom->nmax);
+  atom->add_callback(Atom::GROW);
+  for (int i = 0; i < atom->nlocal; ++i) set_arrays(i);
 }
 
-FixKIFMMPolarize::~FixKIFMMPolarize() = default;
+FixKIFMMPolarize::~FixKIFMMPolarize()
+{
+  if (atom) atom->delete_callback(id, Atom::GROW);
+  memory->destroy(history);
+}
 
 int FixKIFMMPolarize::setmask()
 {
@@ -108,6 +120,17 @@ void FixKIFMMPolarize::init()
 
 void FixKIFMMPolarize::prepare()
 {
+  // the prediction: linear in time through the solutions of the last two solve steps (none at
+  // the step of the last solve, e.g. a run 0 again, or with fewer than two solves before)
+  const bigint step = update->ntimestep;
+  new_step = step != last_step;
+  extrapolation = predict && new_step && last_step > previous_step && previous_step >= 0 && step > last_step
+      ? (double) (step - last_step) / (double) (last_step - previous_step)
+      : 0.0;
+  if (new_step) {
+    previous_step = last_step;
+    last_step = step;
+  }
   if (source != Source::Variable) return;
   alpha_atom.assign(atom->nmax, 0.0);
   const int ivar = input->variable->find(alpha_variable.c_str());
@@ -155,6 +178,19 @@ void FixKIFMMPolarize::external_field(int i, double e[3]) const
       for (int d = 0; d < 3; ++d) e[d] += f.e[d];
 }
 
+// Linear extrapolation in time of the last two solutions, mu_n + f (mu_n - mu_(n-1)) with
+// f = (step - step_n) / (step_n - step_(n-1)) (2 mu_n - mu_(n-1) at every step; a predictor of
+// smoothly moving dipoles, which the solve then corrects to the tolerance)
+void FixKIFMMPolarize::start_guess(int i, const double mu[3], double start[3])
+{
+  double *h = history[i];
+  const double f = h[VALID] != 0.0 ? extrapolation : 0.0;
+  for (int d = 0; d < 3; ++d) start[d] = mu[d] + f * (mu[d] - h[PREVIOUS + d]);
+  if (!new_step) return;    // a solve again at the same step: the history stays
+  for (int d = 0; d < 3; ++d) h[PREVIOUS + d] = mu[d];
+  h[VALID] = 1.0;
+}
+
 void FixKIFMMPolarize::solved(const kifmm::PolarizationSolve &result)
 {
   last = result;
@@ -199,5 +235,32 @@ double FixKIFMMPolarize::compute_vector(int n)
 
 double FixKIFMMPolarize::memory_usage()
 {
-  return (double) alpha_atom.capacity() * sizeof(double);
+  return (double) alpha_atom.capacity() * sizeof(double) + (double) atom->nmax * NCOL * sizeof(double);
+}
+
+void FixKIFMMPolarize::grow_arrays(int nmax)
+{
+  memory->grow(history, nmax, NCOL, "kifmm/polarize:history");
+}
+
+void FixKIFMMPolarize::copy_arrays(int i, int j, int)
+{
+  for (int k = 0; k < NCOL; ++k) history[j][k] = history[i][k];
+}
+
+void FixKIFMMPolarize::set_arrays(int i)
+{
+  for (int k = 0; k < NCOL; ++k) history[i][k] = 0.0;    // no solve before: start from mu
+}
+
+int FixKIFMMPolarize::pack_exchange(int i, double *buf)
+{
+  for (int k = 0; k < NCOL; ++k) buf[k] = history[i][k];
+  return NCOL;
+}
+
+int FixKIFMMPolarize::unpack_exchange(int nlocal, double *buf)
+{
+  for (int k = 0; k < NCOL; ++k) history[nlocal][k] = buf[k];
+  return NCOL;
 }

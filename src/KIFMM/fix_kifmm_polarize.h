@@ -1,5 +1,5 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
-// fix ID group kifmm/polarize alpha A|v_name | permittivity EPS  [tol T] [maxiter N]
+// fix ID group kifmm/polarize alpha A|v_name | permittivity EPS  [tol T] [maxiter N] [predict yes|no]
 //
 // Induced point dipoles on the atoms of the group: mu_i = alpha_i (E_ext + E_i) / qqrd2e,
 // E_i the field of all other charges and dipoles, E_ext that of the fix efield instances,
@@ -26,6 +26,11 @@ class FixKIFMMPolarize : public Fix, public KIFMMPolarization {
   double compute_scalar() override;
   double compute_vector(int) override;
   double memory_usage() override;
+  void grow_arrays(int) override;
+  void copy_arrays(int, int, int) override;
+  void set_arrays(int) override;
+  int pack_exchange(int, double *) override;
+  int unpack_exchange(int, double *) override;
 
   // ---- KIFMMPolarization: called by the kspace style's compute()
   const char *polarization_id() const override { return id; }
@@ -33,6 +38,7 @@ class FixKIFMMPolarize : public Fix, public KIFMMPolarization {
   void prepare() override;
   double polarizability(int i) const override;
   void external_field(int i, double e[3]) const override;
+  void start_guess(int i, const double mu[3], double start[3]) override;
   double tolerance() const override { return tol; }
   int max_iterations() const override { return maxiter; }
   void solved(const kifmm::PolarizationSolve &result) override;
@@ -45,6 +51,16 @@ class FixKIFMMPolarize : public Fix, public KIFMMPolarization {
   double permittivity = 0.0;     // of the spheres; the medium's is the dielectric command's
   double tol = 1.0e-6;
   int maxiter = 100;
+  bool predict = true;
+  // per atom: the dipole of the solve before the last one (3) and whether it is set; moves with
+  // the atom (exchange), not kept in restart files
+  enum { PREVIOUS = 0, VALID = 3, NCOL = 4 };
+  double **history = nullptr;
+  // steps of the last two solves; this solve's extrapolation factor and whether it is at a new
+  // step (then the dipoles the atoms carry become the history)
+  bigint last_step = -1, previous_step = -1;
+  double extrapolation = 0.0;
+  bool new_step = true;
   std::vector<double> alpha_atom;    // this step's polarizabilities of the local atoms (variable)
   struct ExternalField {
     int groupbit;

@@ -31,6 +31,10 @@ class KIFMMPolarization {
   // the field of the fix efield instances whose groups hold it)
   virtual double polarizability(int i) const = 0;
   virtual void external_field(int i, double e[3]) const = 0;
+  // The start of the solve at local atom i from the dipole it carries (the last solve's, mu):
+  // extrapolated from the solve before when the fix predicts; and that dipole kept for the next
+  // prediction
+  virtual void start_guess(int i, const double mu[3], double start[3]) = 0;
   // the solve: relative residual wanted, most iterations
   virtual double tolerance() const = 0;
   virtual int max_iterations() const = 0;

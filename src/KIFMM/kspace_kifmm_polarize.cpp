@@ -5,9 +5,9 @@
 //   mu_i / alpha_i - e_i(mu) = e0_i,   e0_i = E_ext,i / qqrd2e - grad phi_fixed(x_i)
 // (kernel units: phi of the charges and of the permanent dipoles of the other atoms; e(mu) the
 // field -grad phi of the induced dipoles), by kifmm::solve_induced_dipoles started from the
-// dipoles the atoms carry (the last step's). The result goes into atom->mu and the moments of the
-// evaluation that follows, which gives the forces q E + (mu . grad) E, torques and energy of the
-// converged dipoles. Several ranks: the sources of all ranks are gathered (as for dipoles).
+// dipoles the atoms carry (the last step's), extrapolated from the step before by the fix. The
+// result goes into atom->mu and the moments of the evaluation that follows, which gives the
+// forces q E + (mu . grad) E, torques and energy of the converged dipoles. Several ranks: the sources of all ranks are gathered (as for dipoles).
 #include "kspace_kifmm.h"
 
 #include "kifmm_polarization.h"
@@ -48,11 +48,12 @@ void KSpaceKIFMM::polarize_points()
     if (!polarization->polarizable(i)) continue;
     pol.push_back(k);
     alpha.push_back(polarization->polarizability(i));
-    double ext[3];
+    double ext[3], start[3];
     polarization->external_field(i, ext);
+    polarization->start_guess(i, &moment[3 * k], start);
     for (int d = 0; d < 3; ++d) {
       pxyz.push_back(xyz[3 * k + d]);
-      mu.push_back(moment[3 * k + d]);
+      mu.push_back(start[d]);
       e0.push_back(ext[d] / qqrd2e);
       moment[3 * k + d] = 0.0;    // the fixed sources: no induced dipoles
     }

@@ -219,6 +219,27 @@ TEST_F(Polarize, PeriodicForcesAreTheEnergyDerivative)
   expect_forces_are_energy_derivative(*this, {64});
 }
 
+// the start of each solve extrapolated from the last two (predict yes, the default) takes fewer
+// iterations than the last dipoles alone, for the same trajectory within the tolerance
+TEST_F(Polarize, PredictorSavesIterations)
+{
+  auto run = [&](const char *predict) {
+    create();
+    spheres(5);
+    polarize("1e-6", std::string("permittivity 10 tol 1e-8 predict ") + predict);
+    commands("pair_style soft 1.0\npair_coeff * * 10.0\nvelocity all create 0.3 777 loop geom\n"
+             "fix nve all nve/sphere\ntimestep 0.002\nvariable it equal f_pol[1]\n"
+             "fix its all ave/time 1 100 100 v_it\nrun 100 post no");
+    return std::make_tuple(evaluate("f_its"), positions_by_id(), dipoles());
+  };
+  const auto [with, x1, mu1] = run("yes");
+  const auto [without, x0, mu0] = run("no");
+  std::printf("  mean iterations per solve: %.2f predicted, %.2f from the last dipoles\n", with, without);
+  EXPECT_LT(with, 0.8 * without);
+  EXPECT_LE(relative_force_error(x1, x0), 1e-6);
+  EXPECT_LE(relative_force_error(mu1, mu0), 1e-5);
+}
+
 // with fix kifmm/stride the dipoles are solved on evaluation steps only: N = 1 is the run
 // without the fix bit for bit; with N = 3 the dipoles between evaluations are the last ones
 TEST_F(Polarize, StrideSolvesOnEvaluationSteps)

@@ -1,7 +1,8 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Point dipoles in kspace_style kifmm (atoms with a dipole moment mu: atom_style dipole,
-// hybrid sphere dipole; induced ones of fix kifmm/polarize): the engine's evaluate_dipoles gives at every atom the potential phi of
-// all charges and dipoles, its gradient g and its second derivatives h; then
+// hybrid sphere dipole; induced ones of fix kifmm/polarize): the engine's evaluate_dipoles
+// gives at every atom the potential phi of all charges and dipoles, its gradient g and its
+// second derivatives h; then
 //   F_i   = -qqrd2e (q_i g_i + h_i mu_i)        (q E + (mu . grad) E)
 //   tau_i = -qqrd2e mu_i x g_i                  (mu x E)
 //   U     = qqrd2e / 2 sum_i (q_i phi_i + mu_i . g_i)
@@ -43,8 +44,8 @@ void dipole_force_torque(double q, const double *mu, const double *g, const doub
 }    // namespace
 
 // Dipole mode when the atom style has dipole moments and some atom's is not zero, or a fix gives
-// atoms induced dipoles (fix kifmm/polarize). Checked at
-// init: what the dipole sum does not cover yet is an error naming it.
+// atoms induced dipoles (fix kifmm/polarize). Checked at init: what the dipole sum does not
+// cover yet is an error naming it.
 void KSpaceKIFMM::dipole_init()
 {
   dipoles = false;

@@ -48,7 +48,8 @@ FixKIFMMPolarize::FixKIFMMPolarize(LAMMPS *lmp, int narg, char **arg) : Fix(lmp,
       tol = utils::numeric(FLERR, arg[iarg + 1], false, lmp);
       if (!(tol > 0 && tol < 1)) error->all(FLERR, "fix kifmm/polarize: tol {} must be in (0, 1)", val);
     } else if (key == "predict") {
-      if (val != "yes" && val != "no") error->all(FLERR, "fix kifmm/polarize: predict must be yes or no, not '{}'", val);
+      if (val != "yes" && val != "no")
+        error->all(FLERR, "fix kifmm/polarize: predict must be yes or no, not '{}'", val);
       predict = val == "yes";
     } else if (key == "maxiter") {
       maxiter = utils::inumeric(FLERR, arg[iarg + 1], false, lmp);

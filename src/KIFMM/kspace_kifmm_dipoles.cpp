@@ -69,7 +69,8 @@ void KSpaceKIFMM::dipole_init()
 
 bool KSpaceKIFMM::is_point(int i) const
 {
-  return strength_of(i) != 0.0 || (dipoles && (has_moment(atom->mu[i]) || (polarization && polarization->polarizable(i))));
+  if (strength_of(i) != 0.0) return true;
+  return dipoles && (has_moment(atom->mu[i]) || (polarization && polarization->polarizable(i)));
 }
 
 // The sources of a dipole evaluation: this rank's points on one rank; on several, the points of

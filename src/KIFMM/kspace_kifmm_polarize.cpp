@@ -7,7 +7,8 @@
 // field -grad phi of the induced dipoles), by kifmm::solve_induced_dipoles started from the
 // dipoles the atoms carry (the last step's), extrapolated from the step before by the fix. The
 // result goes into atom->mu and the moments of the evaluation that follows, which gives the
-// forces q E + (mu . grad) E, torques and energy of the converged dipoles. Several ranks: the sources of all ranks are gathered (as for dipoles).
+// forces q E + (mu . grad) E, torques and energy of the converged dipoles. Several ranks: the
+// sources of all ranks are gathered (as for dipoles).
 #include "kspace_kifmm.h"
 
 #include "kifmm_polarization.h"

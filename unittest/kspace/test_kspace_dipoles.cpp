@@ -3,8 +3,8 @@
 // same physics: pair lj/cut/dipole/cut with epsilon 0 and a Coulomb cutoff beyond the box
 // (charge-charge, charge-dipole and dipole-dipole terms). Forces, torques, energy, pressure
 // tensor, the order chosen for a requested accuracy, energy conservation under fix nve/sphere
-// update dipole, fix kifmm/stride's held forces and torques, and the clear errors of what the dipole sum does not cover. Under mpiexec the
-// same comparisons hold on several ranks.
+// update dipole, fix kifmm/stride's held forces and torques, and the clear errors of what the
+// dipole sum does not cover. Under mpiexec the same comparisons hold on several ranks.
 #include "kspace_kifmm.h"
 #include "lammps_fixture.h"
 

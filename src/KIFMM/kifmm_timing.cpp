@@ -15,11 +15,12 @@
 using namespace LAMMPS_NS;
 
 void KIFMMTiming::add(const kifmm::Stats &s, double comm, double total, std::size_t targets,
-                      std::size_t bytes_sent)
+                      std::size_t bytes_sent, double polarize)
 {
   bytes += (double) bytes_sent;
   const double engine[] = {s.t_tree, s.t_lists, s.t_upward, s.t_m2l, s.t_wx, s.t_downward, s.t_p2p};
-  double used = comm;
+  double used = comm + polarize;
+  t[Polarize] += polarize;
   for (int k = 0; k < 7; ++k) {
     t[k] += engine[k];
     used += engine[k];
@@ -56,7 +57,7 @@ void LAMMPS_NS::print_kifmm_timing(LAMMPS *lmp, const KIFMMTiming &timing)
   MPI_Allreduce(mine, sum, n, MPI_DOUBLE, MPI_SUM, world);
   if (lmp->comm->me != 0 || timing.evaluations == 0) return;
   static const char *names[] = {"Tree", "Lists", "Upward", "M2L", "W/X", "Downward",
-                                "P2P", "Comm", "Other"};
+                                "P2P", "Comm", "Polarize", "Other"};
   double total = 0;
   for (int k = 0; k < KIFMMTiming::NPHASES; ++k) total += sum[k] / nprocs;
   std::string mesg = fmt::format(

@@ -16,15 +16,19 @@ struct Stats;
 namespace LAMMPS_NS {
 
 struct KIFMMTiming {
-  enum Phase { Tree, Lists, Upward, M2L, WX, Downward, P2P, Comm, Other, NPHASES };
+  // Polarize: the solve for induced dipoles (fix kifmm/polarize) before the evaluation, all its
+  // field evaluations included
+  enum Phase { Tree, Lists, Upward, M2L, WX, Downward, P2P, Comm, Polarize, Other, NPHASES };
   double t[NPHASES] = {};
   long evaluations = 0;
   double points = 0;    // sum over evaluations of this rank's targets
   double bytes = 0;     // sum over evaluations of the bytes this rank sent (communication volume)
 
   void reset() { *this = KIFMMTiming(); }
-  // adds one evaluation: engine phases from its stats, comm time and bytes sent, total
-  void add(const kifmm::Stats &s, double comm, double total, std::size_t targets, std::size_t bytes_sent = 0);
+  // adds one evaluation: engine phases from its stats, comm time and bytes sent, the time of
+  // the solve for induced dipoles, total
+  void add(const kifmm::Stats &s, double comm, double total, std::size_t targets, std::size_t bytes_sent = 0,
+           double polarize = 0);
 };
 
 class FixKIFMMTiming : public Fix {

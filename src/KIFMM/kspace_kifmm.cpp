@@ -507,7 +507,12 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   if (tree_choice_pending) choose_tree_from_atoms();
   // induced dipoles first (kspace_kifmm_polarize.cpp); an energy-only evaluation of fix
   // kifmm/stride takes the dipoles of its last evaluation, with its held forces
-  if (polarization && action != Stride::EnergyOnly) polarize_points();
+  double t_polarize = 0;
+  if (polarization && action != Stride::EnergyOnly) {
+    t_polarize = MPI_Wtime();
+    polarize_points();
+    t_polarize = MPI_Wtime() - t_polarize;
+  }
   const bool want_potential = eflag_global || eflag_atom || keep || (periodic && vflag_global);
   prepare_rigid_bodies();
   double comm_time = 0;
@@ -573,7 +578,7 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   if (action == Stride::Evaluate) schedule->end_evaluation(energy, virial);
 
   run_timing.add(phases, comm_time, MPI_Wtime() - t_start, n,
-                 distributed() ? engine->stats().comm_bytes : 0);
+                 distributed() ? engine->stats().comm_bytes : 0, t_polarize);
   if (!reported_first_evaluation) report_first_evaluation();
   report_coincident_pairs(nsrc > 0 ? phases.coincident_pairs : 0);
   if (kset.check_every > 0 && update->ntimestep % kset.check_every == 0) check_error();

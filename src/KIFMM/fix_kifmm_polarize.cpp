@@ -132,6 +132,12 @@ void FixKIFMMPolarize::prepare()
     previous_step = last_step;
     last_step = step;
   }
+  evaluate_alpha();
+}
+
+// alpha v_name: the variable's values on the local atoms (collective)
+void FixKIFMMPolarize::evaluate_alpha()
+{
   if (source != Source::Variable) return;
   alpha_atom.assign(atom->nmax, 0.0);
   const int ivar = input->variable->find(alpha_variable.c_str());
@@ -216,7 +222,7 @@ void FixKIFMMPolarize::solved(const kifmm::PolarizationSolve &result)
 // polarization energy sum_i qqrd2e mu_i^2 / (2 alpha_i) of the group's dipoles
 double FixKIFMMPolarize::compute_scalar()
 {
-  if (source == Source::Variable) prepare();
+  evaluate_alpha();    // not prepare(): the energy at any step leaves the solve's steps alone
   double local = 0.0, all = 0.0;
   double **mu = atom->mu;
   for (int i = 0; i < atom->nlocal; ++i) {

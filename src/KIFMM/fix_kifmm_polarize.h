@@ -71,6 +71,7 @@ class FixKIFMMPolarize : public Fix, public KIFMMPolarization {
   bool solved_once = false;
   bigint warned_step = -1;
   double alpha_of(int i) const;
+  void evaluate_alpha();
 };
 
 }    // namespace LAMMPS_NS

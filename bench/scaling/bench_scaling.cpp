@@ -1,6 +1,6 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Strong-scaling benchmark of the distributed evaluation (engine level, no LAMMPS):
-//   mpirun -np P bench_scaling N [uniform|periodic|plummer] [order] [reps] [top_level] [choice]
+//   mpirun -np P bench_scaling N [uniform|periodic|plummer] [order] [reps] [top_level] [choice|leaf=M|grid=K]
 // Each rank makes only its own points: uniform in its brick of a P-brick decomposition of
 // [-1,1]^3 (as LAMMPS's processor grid; periodic: the same points, [-1,1]^3 is the periodic
 // cell, Laplace with its background term), or, for plummer, the points of a Plummer sphere in its
@@ -65,7 +65,9 @@ int main(int argc, char **argv)
   const int top = argc > 5 ? std::atoi(argv[5]) : 0;
   // "choice": leaf size (periodic: or single-level grid) of kifmm::choose_tree(order, N,
   // periodic, grid), as kspace_style kifmm on several ranks; default: the per-order leaf size
-  const bool choice = argc > 6 && std::string(argv[6]) == "choice";
+  // "leaf=M": that leaf size (octree); "grid=K": the periodic single-level grid of K^3 cells
+  const std::string how = argc > 6 ? argv[6] : "";
+  const bool choice = how == "choice";
   int g[3];
   grid(P, g);
   const int c[3] = {me % g[0], (me / g[0]) % g[1], me / (g[0] * g[1])};
@@ -108,6 +110,11 @@ int main(int argc, char **argv)
     const kifmm::TreeChoice c = kifmm::choose_tree(order, N, o.periodic, o.periodic);
     o.leaf_size = c.leaf_size;
     o.periodic_grid = c.grid;
+  } else if (how.rfind("leaf=", 0) == 0) {
+    o.leaf_size = std::atoi(how.c_str() + 5);
+    o.periodic_grid = 0;
+  } else if (how.rfind("grid=", 0) == 0) {
+    o.periodic_grid = std::atoi(how.c_str() + 5);
   }
   kifmm::KernelSpec spec;
   kifmm::FmmEvaluator<kifmm::LaplaceKernel> ev(kifmm::LaplaceKernel{}, spec, o);

@@ -641,24 +641,36 @@ template <class K> void FmmEvaluator<K>::downward()
       if (l > first_level() && has_local_[cells[c].parent]) has_local_[c] = 1;
       if (has_local_[c]) list.push_back(c);
     }
-    const int n = (int) list.size(), nchunks = (n + kBatch - 1) / kBatch;
+    // Chunks hold cells of one child octant, so that L2L is one product over the whole chunk
+    // (an operator is packed once per product: few columns per product would cost more in
+    // packing than in arithmetic at high orders).
+    const bool l2l = l > first_level();
+    if (l2l)
+      std::stable_sort(list.begin(), list.end(),
+                       [&](int a, int b) { return (cells[a].prefix & 7) < (cells[b].prefix & 7); });
+    std::vector<std::pair<int, int>> chunks;
+    for (int i = 0, n = (int) list.size(); i < n;) {
+      int e = i + 1;
+      while (e < n && e - i < kBatch && (!l2l || (cells[list[e]].prefix & 7) == (cells[list[i]].prefix & 7))) ++e;
+      chunks.emplace_back(i, e);
+      i = e;
+    }
+    const int nchunks = (int) chunks.size();
 #pragma omp parallel if (nchunks > 1)
     {
       std::vector<double> chk, eq, xb, yb;
       std::vector<int> sel;
 #pragma omp for schedule(dynamic, 1)
       for (int ch = 0; ch < nchunks; ++ch) {
-        const int i0 = ch * kBatch, m = std::min(n, (ch + 1) * kBatch) - i0;
+        const int i0 = chunks[ch].first, m = chunks[ch].second - i0;
         chk.resize((std::size_t) nsurf_ * m);
         for (int j = 0; j < m; ++j) std::copy(dcheck(list[i0 + j]), dcheck(list[i0 + j]) + nsurf_, &chk[(std::size_t) j * nsurf_]);
-        if (l > first_level()) {    // L2L by octant, from the parents' downward equivalents
-          for (int oct = 0; oct < 8; ++oct) {
-            sel.clear();
-            for (int j = 0; j < m; ++j) {
-              const Cell &C = cells[list[i0 + j]];
-              if ((int) (C.prefix & 7) == oct && has_local_[C.parent]) sel.push_back(j);
-            }
-            if (sel.empty()) continue;
+        if (l2l) {    // L2L from the parents' downward equivalents (one octant per chunk)
+          const int oct = (int) (cells[list[i0]].prefix & 7);
+          sel.clear();
+          for (int j = 0; j < m; ++j)
+            if (has_local_[cells[list[i0 + j]].parent]) sel.push_back(j);
+          if (!sel.empty()) {
             xb.resize((std::size_t) nsurf_ * sel.size());
             for (std::size_t k = 0; k < sel.size(); ++k) {
               const double *src = dequiv(cells[list[i0 + sel[k]]].parent);

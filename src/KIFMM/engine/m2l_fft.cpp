@@ -100,29 +100,47 @@ M2LTransform::M2LTransform(int p) : p_(p), n_(m2l_grid_n(p)), nfreq_(m2l_nfreq(p
   const std::vector<int> lat = surface_lattice(p);
   surf2grid_.resize(lat.size() / 3);
   for (std::size_t m = 0; m < surf2grid_.size(); ++m)
-    surf2grid_[m] = (lat[3 * m] * n_ + lat[3 * m + 1]) * n_ + lat[3 * m + 2];
-  // one pair of plans per order for the whole process
-  static std::map<int, std::pair<fftw_plan, fftw_plan>> plans;
+    surf2grid_[m] = (lat[3 * m] * p_ + lat[3 * m + 1]) * n_ + lat[3 * m + 2];
+  // one set of plans per order for the whole process
+  struct Plans {
+    fftw_plan f[3], b[3];
+  };
+  static std::map<int, Plans> plans;
   std::lock_guard<std::mutex> lock(fftw_mutex());
   auto it = plans.find(p);
   if (it == plans.end()) {
-    double *g = fftw_alloc_real((std::size_t) n_ * n_ * n_);
+    const int n = n_, nz = n / 2 + 1;
+    double *g = fftw_alloc_real((std::size_t) p * p * n);
     fftw_complex *s = fftw_alloc_complex(nraw_);
-    fftw_plan f = fftw_plan_dft_r2c_3d(n_, n_, n_, g, s, FFTW_ESTIMATE);
-    fftw_plan b = fftw_plan_dft_c2r_3d(n_, n_, n_, s, g, FFTW_ESTIMATE);
+    // complex layout [kx][ky][kz] (that of a 3-d r2c transform); real lines [x < p][y < p][z]
+    const fftw_iodim along_z = {n, 1, 1}, along_y = {n, nz, nz}, along_x = {n, n * nz, n * nz};
+    const fftw_iodim lines_z[2] = {{p, p * n, n * nz}, {p, n, nz}};       // x < p, y < p
+    const fftw_iodim lines_y[2] = {{p, n * nz, n * nz}, {nz, 1, 1}};     // x < p, all kz
+    const fftw_iodim lines_x[2] = {{n, nz, nz}, {nz, 1, 1}};             // all y, all kz
+    const fftw_iodim lines_zb[2] = {{p, n * nz, p * n}, {p, nz, n}};     // back to the real lines
+    Plans pl;
+    pl.f[0] = fftw_plan_guru_dft_r2c(1, &along_z, 2, lines_z, g, s, FFTW_ESTIMATE);
+    pl.f[1] = fftw_plan_guru_dft(1, &along_y, 2, lines_y, s, s, FFTW_FORWARD, FFTW_ESTIMATE);
+    pl.f[2] = fftw_plan_guru_dft(1, &along_x, 2, lines_x, s, s, FFTW_FORWARD, FFTW_ESTIMATE);
+    pl.b[0] = fftw_plan_guru_dft(1, &along_x, 2, lines_x, s, s, FFTW_BACKWARD, FFTW_ESTIMATE);
+    pl.b[1] = fftw_plan_guru_dft(1, &along_y, 2, lines_y, s, s, FFTW_BACKWARD, FFTW_ESTIMATE);
+    pl.b[2] = fftw_plan_guru_dft_c2r(1, &along_z, 2, lines_zb, s, g, FFTW_ESTIMATE);
     fftw_free(g);
     fftw_free(s);
-    if (!f || !b) throw std::runtime_error("kifmm: FFTW plan creation failed");
-    it = plans.emplace(p, std::make_pair(f, b)).first;
+    for (int k = 0; k < 3; ++k)
+      if (!pl.f[k] || !pl.b[k]) throw std::runtime_error("kifmm: FFTW plan creation failed");
+    it = plans.emplace(p, pl).first;
   }
-  plan_fwd_ = (void *) it->second.first;
-  plan_bwd_ = (void *) it->second.second;
+  for (int k = 0; k < 3; ++k) {
+    fwd_[k] = (void *) it->second.f[k];
+    bwd_[k] = (void *) it->second.b[k];
+  }
 }
 
 M2LTransform::Workspace::Workspace(const M2LTransform &t)
 {
   const int n = m2l_grid_n(t.p());
-  grid = fftw_alloc_real((std::size_t) n * n * n);
+  grid = fftw_alloc_real((std::size_t) t.p() * t.p() * n);
   spec = (double *) fftw_alloc_complex(t.nfreq());
 }
 
@@ -134,9 +152,17 @@ M2LTransform::Workspace::~Workspace()
 
 void M2LTransform::forward(const double *equiv, double *hat, std::size_t stride, Workspace &w) const
 {
-  std::memset(w.grid, 0, sizeof(double) * n_ * n_ * n_);
+  const int n = n_, p = p_, nz = n / 2 + 1;
+  std::memset(w.grid, 0, sizeof(double) * p * p * n);
   for (std::size_t m = 0; m < surf2grid_.size(); ++m) w.grid[surf2grid_[m]] = equiv[m];
-  fftw_execute_dft_r2c((fftw_plan) plan_fwd_, w.grid, (fftw_complex *) w.spec);
+  // the passes along y and x read lines that the previous passes do not write: zero them
+  for (int x = 0; x < p; ++x)
+    std::memset(w.spec + 2 * ((std::size_t) x * n + p) * nz, 0, sizeof(double) * 2 * (n - p) * nz);
+  std::memset(w.spec + 2 * (std::size_t) p * n * nz, 0, sizeof(double) * 2 * (n - p) * n * nz);
+  fftw_complex *spec = (fftw_complex *) w.spec;
+  fftw_execute_dft_r2c((fftw_plan) fwd_[0], w.grid, spec);
+  fftw_execute_dft((fftw_plan) fwd_[1], spec, spec);
+  fftw_execute_dft((fftw_plan) fwd_[2], spec, spec);
   for (int b = 0; b < nfreq_ / 16; ++b) {
     double *chunk = hat + b * stride;
     for (int j = 0; j < 16; ++j) {
@@ -154,7 +180,10 @@ void M2LTransform::inverse_add(const double *hat, std::size_t stride, double *ch
     w.spec[2 * f] = chunk[f % 16];
     w.spec[2 * f + 1] = chunk[16 + f % 16];
   }
-  fftw_execute_dft_c2r((fftw_plan) plan_bwd_, (fftw_complex *) w.spec, w.grid);
+  fftw_complex *spec = (fftw_complex *) w.spec;
+  fftw_execute_dft((fftw_plan) bwd_[0], spec, spec);
+  fftw_execute_dft((fftw_plan) bwd_[1], spec, spec);
+  fftw_execute_dft_c2r((fftw_plan) bwd_[2], spec, w.grid);
   for (std::size_t m = 0; m < surf2grid_.size(); ++m) check[m] += scale * w.grid[surf2grid_[m]];
 }
 

@@ -3,13 +3,16 @@
 // kspace_style kifmm takes on one rank without a leaf size (kifmm::plan_tree, then
 // kifmm::choose_tree_from_points on the points), and every distinct tree of a sweep of leaf
 // sizes (8 .. 8192, factor --factor; leaf sizes that give the same tree as a smaller one are
-// timed once). Single-thread CPU time per N-body evaluation (potential + gradient, sources =
+// timed once; --min-leaf skips the smaller ones); with periodic boundaries also every
+// single-level grid of k^3 cells within the engine's memory bound (k = 3 .. max_grid_cells_long,
+// at every order) with at least 2 points per cell. Single-thread CPU time per N-body evaluation (potential + gradient, sources =
 // targets), all candidates interleaved in rotating order for --reps rounds, each timed over at
 // least --min-time seconds. Printed per case: the automatic leaf and depth, the fastest swept
 // leaf and depth, their median times, and auto / best (median over the rounds of the per-round
 // ratios; 1.00 = the automatic tree is the fastest of the sweep).
 //   bench_tree_sweep [--sets uniform,plummer,clusters] [--sizes 1e3,1e4,1e5] [--orders 3,6,9,12]
-//                    [--periodic] [--reps 3] [--min-time 0.2] [--factor 1.41] [--data F.data,...]
+//                    [--periodic] [--reps 3] [--min-time 0.2] [--factor 1.41] [--min-leaf 8]
+//                    [--data F.data,...]
 // Points: unittest/common/kifmm_point_sets.h (uniform in [-1,1]^3, Plummer sphere, two dense
 // clusters), or LAMMPS data files with "Atoms # charge" (id type q x y z). Periodic: the points
 // scaled into the cell [-1,1]^3, charges made neutral. Run with OMP_NUM_THREADS=1.
@@ -49,7 +52,13 @@ double median(std::vector<double> v)
 struct Candidate {
   int leaf = 0, depth = 0;
   std::vector<double> times;
+  int grid = 0;    // periodic: single-level grid of grid^3 cells instead of the octree
 };
+
+std::string tree_label(int grid, int leaf)
+{
+  return grid > 0 ? "grid " + std::to_string(grid) + "^3" : std::to_string(leaf);
+}
 
 struct Case {
   std::string name;
@@ -71,7 +80,7 @@ double time_evaluation(kifmm::Evaluator &ev, const bench::Points &p, std::vector
   return t / k;
 }
 
-void sweep(const Case &c, int order, bool periodic, int reps, double min_time, double factor)
+void sweep(const Case &c, int order, bool periodic, int reps, double min_time, double factor, double min_leaf)
 {
   const std::size_t n = c.pts.size();
   const kifmm::KernelSpec kernel;
@@ -90,6 +99,7 @@ void sweep(const Case &c, int order, bool periodic, int reps, double min_time, d
   std::vector<Candidate> cands;
   std::map<std::pair<int, double>, int> seen;
   for (double leaf = 8; leaf <= 8192 && leaf <= 2.0 * n; leaf *= factor) {
+    if (leaf < min_leaf) continue;
     const int l = (int) std::lround(leaf);
     kifmm::Options o = opt;
     o.leaf_size = l;
@@ -97,6 +107,11 @@ void sweep(const Case &c, int order, bool periodic, int reps, double min_time, d
     if (!seen.emplace(std::make_pair(m.depth, m.cost), l).second) continue;
     cands.push_back(Candidate{l, m.depth, {}});
   }
+  // periodic: every single-level grid within the engine's memory bound, at every order, with
+  // at least 2 points per cell on average
+  if (periodic)
+    for (int k = 3; k <= kifmm::max_grid_cells_long(order, nullptr) && (k == 3 || 2.0 * k * k * k <= n); ++k)
+      cands.push_back(Candidate{0, 1, {}, k});
   // the automatic tree is the last candidate (timed even if a swept leaf gives the same tree)
   const int grid = autom.periodic_grid;
   cands.push_back(Candidate{autom.leaf_size, choice.depth, {}});
@@ -104,6 +119,7 @@ void sweep(const Case &c, int order, bool periodic, int reps, double min_time, d
   for (std::size_t i = 0; i < cands.size(); ++i) {
     kifmm::Options o = opt;
     o.leaf_size = cands[i].leaf;
+    o.periodic_grid = cands[i].grid;
     if (i + 1 == cands.size()) o = autom;
     evs.push_back(kifmm::make_evaluator(kernel, o));
   }
@@ -125,9 +141,9 @@ void sweep(const Case &c, int order, bool periodic, int reps, double min_time, d
   std::vector<double> ratio;
   for (int r = 0; r < reps; ++r) ratio.push_back(cands.back().times[r] / cands[best].times[r]);
   const Candidate &a = cands.back(), &b = cands[best];
-  std::printf("| %s | %zu | %d | %s%d / %d | %d / %d | %.4g / %.4g | %.2f | %zu |\n", c.name.c_str(), n, order,
-              grid > 0 ? ("grid " + std::to_string(grid) + "^3, leaf ").c_str() : "", a.leaf, b.leaf, a.depth,
-              b.depth, median(a.times), median(b.times), median(ratio), m - 1);
+  std::printf("| %s | %zu | %d | %s / %s | %d / %d | %.4g / %.4g | %.2f | %zu |\n", c.name.c_str(), n, order,
+              tree_label(grid, a.leaf).c_str(), tree_label(b.grid, b.leaf).c_str(), a.depth, b.depth,
+              median(a.times), median(b.times), median(ratio), m - 1);
   std::fflush(stdout);
 }
 
@@ -139,7 +155,7 @@ int main(int argc, char **argv)
   std::vector<double> sizes = {1e3, 1e4, 1e5}, orders = {3, 6, 9, 12};
   bool periodic = false;
   int reps = 3;
-  double min_time = 0.2, factor = 1.41;
+  double min_time = 0.2, factor = 1.41, min_leaf = 8;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -154,6 +170,7 @@ int main(int argc, char **argv)
     else if (a == "--reps") reps = std::max(1, std::atoi(next().c_str()));
     else if (a == "--min-time") min_time = std::atof(next().c_str());
     else if (a == "--factor") factor = std::max(1.05, std::atof(next().c_str()));
+    else if (a == "--min-leaf") min_leaf = std::atof(next().c_str());
     else {
       std::fprintf(stderr, "bench_tree_sweep: unknown option %s\n", a.c_str());
       return 1;
@@ -181,7 +198,7 @@ int main(int argc, char **argv)
   std::printf("|---|---|---|---|---|---|---|---|\n");
   for (auto &c : cases) {
     if (periodic) c.pts = bench::into_periodic_cell(c.pts);
-    for (double p : orders) sweep(c, (int) p, periodic, reps, min_time, factor);
+    for (double p : orders) sweep(c, (int) p, periodic, reps, min_time, factor, min_leaf);
   }
   return 0;
 }

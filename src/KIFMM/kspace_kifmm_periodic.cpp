@@ -54,15 +54,25 @@ void KSpaceKIFMM::periodic_init()
                "m in every dimension",
                boundary_name(domain->boundary[0][0]), boundary_name(domain->boundary[1][0]),
                boundary_name(domain->boundary[2][0]));
-  if (slab && kset.kernel != LongRangeKernel::Coulomb)
+  if (slab && kset.kernel == LongRangeKernel::Yukawa)
     error->all(FLERR,
-               "kspace_style kifmm: kernel {} with boundary p p {} (a slab) is not supported; the "
-               "doubly periodic sum is implemented for kernel coulomb",
-               kifmm_lammps::kernel_name(kset.kernel), boundary_name(domain->boundary[2][0]));
+               "kspace_style kifmm: kernel yukawa with boundary p p {} (a slab) is not supported; the "
+               "doubly periodic sum is implemented for kernels coulomb and gravity",
+               boundary_name(domain->boundary[2][0]));
   if (slab && kset.grid == 0)
     error->all(FLERR, "kspace_style kifmm: 'kspace_modify kifmm grid no' (the octree) is not available "
                       "with boundary p p f: a slab uses the single-level grid");
-  if (kset.kernel == LongRangeKernel::Gravity && !kset.jeans)
+  // gravity in a slab: the doubly periodic sum of the masses converges as it is (far from the
+  // layer, the field of a uniform plane of the mean surface density, 2 pi G sigma toward it):
+  // there is no background to subtract
+  if (slab && kset.kernel == LongRangeKernel::Gravity && kset.jeans)
+    error->all(FLERR,
+               "kspace_style kifmm: 'kspace_modify kifmm jeans yes' is not available with boundary p p "
+               "{} (a slab): the doubly periodic sum of the masses converges without a background (far "
+               "from the layer its field is that of a uniform plane, 2 pi G sigma toward it); leave "
+               "jeans at no",
+               boundary_name(domain->boundary[2][0]));
+  if (!slab && kset.kernel == LongRangeKernel::Gravity && !kset.jeans)
     error->all(FLERR,
                "kspace_style kifmm: kernel gravity with periodic boundaries diverges (the mean "
                "density is not zero); use 'kspace_modify kifmm jeans yes' to subtract it "

@@ -627,7 +627,44 @@ TEST_F(Periodic, SlabUnsupportedSettingsAreErrors)
   command("kspace_modify kifmm grid no");
   EXPECT_LAMMPS_ERROR(command("run 0"), "grid no' \\(the octree\\) is not available with boundary p p f");
   command("kspace_modify kifmm grid auto kernel gravity 1.0 jeans yes");
-  EXPECT_LAMMPS_ERROR(command("run 0"), "kernel gravity with boundary p p f \\(a slab\\) is not supported");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "'kspace_modify kifmm jeans yes' is not available with boundary p p f "
+                                        "\\(a slab\\).*converges without a background");
+  command("kspace_modify kifmm kernel yukawa 2.0 jeans no");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "kernel yukawa with boundary p p f \\(a slab\\) is not supported");
+}
+
+// gravity in a slab: the doubly periodic sum of the masses as it is (the field of the mean
+// surface density is that of a plane), i.e. the coulomb slab sum of charges equal to the masses
+// (itself checked against ewald with a large slab factor above) times -G; on 1 to 4 ranks
+TEST_F(Periodic, GravitySlabEqualsCoulombOnMasses)
+{
+  Configuration c = uniform_cube(400, 72);
+  c.type_mass = {1.0, 1.5, 2.0};
+  c.type.resize(c.x.size());
+  for (size_t i = 0; i < c.x.size(); ++i) {
+    c.type[i] = 1 + (int) (i % 3);
+    c.q[i] = c.type_mass[c.type[i] - 1];    // all positive: net "charge" = total mass
+  }
+  load(c, "p p f");
+  command("change_box all z final 0 0.7 remap units box");
+  const double G = 0.8;
+  Result coul = kifmm("1e-10", "order 12");
+  Result grav = kifmm("1e-10", "kernel gravity 0.8 order 12");
+  for (auto &[id, f] : coul.f)
+    for (double &v : f) v *= -G;
+  EXPECT_LE(relative_force_error(grav.f, coul.f), 1e-12);
+  EXPECT_NEAR(grav.energy, -G * coul.energy, 1e-12 * std::fabs(coul.energy));
+  // the plane field: the mean vertical force on the atoms above the mid-plane points down
+  double fz_up = 0.0;
+  int n_up = 0;
+  for (int i = 0; i < lmp->atom->nlocal; ++i)
+    if (lmp->atom->x[i][2] > 0.35) {
+      fz_up += lmp->atom->f[i][2];
+      ++n_up;
+    }
+  double mine[2] = {fz_up, (double) n_up}, all[2];
+  MPI_Allreduce(mine, all, 2, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+  EXPECT_LT(all[0] / all[1], 0.0);
 }
 
 TEST_F(Periodic, TriclinicIsAnError)

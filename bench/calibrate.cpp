@@ -372,7 +372,7 @@ int grid_cost_fit(int order_lo, int order_hi, int reps)
       double qs = 0;
       for (double q : p.q) qs += q;
       for (double &q : p.q) q -= qs / n;
-      for (int k = 3; k <= max_grid_cells(order); ++k) {
+      for (int k = 3; k <= max_grid_cells_long(order, nullptr); ++k) {    // the memory bound
         const double m = nd / (k * k * k);
         if (m < 8 || m > 1000) continue;
         Options o;

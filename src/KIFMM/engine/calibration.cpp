@@ -286,7 +286,7 @@ TreeCounts tree_counts(const Octree &tree, const InteractionLists &lists, const 
 namespace {
 // Seconds per cell of the periodic single-level grid, in ns per order: produced by
 // `OMP_NUM_THREADS=1 ./bench/calibrate --grid-cost` (bench/calibrate.cpp; the point, pair and
-// entry terms are those of kCost), 2026-12-02, in brackets the RMS relative residual over the
+// entry terms are those of kCost), 2026-12-02 (orders 3-10) and 2026-12-04 (11-14), in brackets the RMS relative residual over the
 // grids with 8 to 1000 atoms per cell at N = 3e3, 1e4, 3e4 (the per-cell work grows slowly
 // with k: the convolution is O(log k) per cell, and the spectra leave the caches).
 struct GridRow {
@@ -302,6 +302,10 @@ const GridRow kGridCost[] = {
     {8, 4.754e+04},    // [0.082]
     {9, 1.112e+05},    // [0.054]
     {10, 1.151e+05},    // [0.085]
+    {11, 1.979e+05},    // [0.142]  orders 11-14: grid_cost_fit_2026-12-04_orders11-14.txt
+    {12, 2.298e+05},    // [0.108]
+    {13, 3.179e+05},    // [0.101]
+    {14, 3.89e+05},    // [0.103]
 };
 }    // namespace
 

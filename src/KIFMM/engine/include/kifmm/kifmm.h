@@ -221,8 +221,8 @@ bool grid_fits_cell(int order, int k, const double shape[3], bool open_z = false
 TreeChoice choose_slab_grid(int order, std::size_t n, const double shape[3]);
 // Cells along the longest axis of the grids that fit in the memory bound at this order (kernels
 // and convolution buffer at most 64 MB each) in a cell of this shape: 3 .. this. (In cubes and
-// nearly cubic cells, where the octree is the alternative, choose_tree offers grids only at the
-// orders whose grid cost is fitted, up to 10.)
+// nearly cubic cells, where the octree is the alternative, choose_tree offers grids at the
+// orders whose grid cost is fitted: 3 to 14.)
 int max_grid_cells_long(int order, const double *shape);
 
 // Cells per axis of the grid with k cells along the longest axis of a periodic cell of this

@@ -1,0 +1,85 @@
+#!/usr/bin/env python3
+# This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
+# The tree of the distributed evaluation (kspace_style kifmm on several ranks: the uniform
+# model's leaf size or periodic grid, kifmm::choose_tree(order, N, periodic, grid)) against a
+# sweep of leaf sizes (and, periodic, single-level grids), on P ranks of bench_scaling.
+#   python3 bench/scaling/tree_sweep_ranks.py [--build build] [--np 2] [--rounds 3]
+#       [--cases uniform:1e5:3,6,10 periodic:1e5:3,6,10 plummer:1e5:3,6,10]
+# Every candidate is one bench_scaling process (2 evaluations after a warm-up); all candidates
+# of a case run in rotating order for --rounds rounds. Time: wall seconds per evaluation (the
+# slowest rank). Prints a provenance line and one markdown row per case: automatic and fastest
+# swept tree, their median times and auto / best (median over the rounds of the per-round
+# ratios; below 1: the automatic tree is faster than every swept one).
+import argparse
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import time
+
+
+def run(build, np, n, dist, order, how):
+    env = dict(os.environ, OMP_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+               OMPI_MCA_rmaps_base_oversubscribe="1")
+    cmd = ["mpirun", "--bind-to", "none", "-np", str(np), "-x", "OMP_NUM_THREADS",
+           os.path.join(build, "bench", "scaling", "bench_scaling"), str(n), dist, str(order), "2", "0", how]
+    out = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True).stdout
+    return json.loads([l for l in out.splitlines() if l.startswith("{")][-1])
+
+
+def label(r):
+    return "grid %d^3" % r["grid"] if r["grid"] > 0 else str(r["leaf"])
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--build", default="build")
+    ap.add_argument("--np", type=int, default=2)
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--cases", nargs="*", default=["uniform:1e5:3,6,10", "periodic:1e5:3,6,10", "plummer:1e5:3,6,10"])
+    a = ap.parse_args()
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
+    load = open("/proc/loadavg").read().split()[:3]
+    print("commit %s, %s, %d cores, %s, load %s" % (commit, time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+                                                    os.cpu_count(), platform.processor() or platform.machine(),
+                                                    " ".join(load)))
+    print("command: python3 bench/scaling/tree_sweep_ranks.py %s" % " ".join(sys.argv[1:]))
+    print("\nwall s per evaluation on %d ranks x 1 thread (slowest rank), medians of %d rounds\n" % (a.np, a.rounds))
+    print("| points | N | p | ranks | tree auto / best | depth auto / best | s auto / best | auto/best | candidates |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for case in a.cases:
+        dist, n, orders = case.split(":")
+        n = int(float(n))
+        for order in [int(o) for o in orders.split(",")]:
+            hows = ["choice"] + ["leaf=%d" % l for l in (16, 32, 64, 128, 256, 512, 1024, 2048, 4096) if l <= n]
+            if dist == "periodic":
+                hows += ["grid=%d" % k for k in (3, 4, 6, 8, 11, 16, 22) if 2 * k ** 3 <= n]
+            times = {h: [] for h in hows}
+            rows = {}
+            for r in range(a.rounds):
+                for k in range(len(hows)):
+                    h = hows[(k + r) % len(hows)]
+                    try:
+                        row = run(a.build, a.np, n, dist, order, h)
+                    except subprocess.CalledProcessError:
+                        times.pop(h, None)    # a grid beyond the memory bound, or no tree
+                        continue
+                    if h in times:
+                        times[h].append(row["wall"])
+                        rows[h] = row
+                hows = [h for h in hows if h in times]
+            swept = [h for h in hows if h != "choice"]
+            best = min(swept, key=lambda h: statistics.median(times[h]))
+            ratio = statistics.median([x / y for x, y in zip(times["choice"], times[best])])
+            ra, rb = rows["choice"], rows[best]
+            print("| %s | %d | %d | %d | %s / %s | %d / %d | %.4g / %.4g | %.2f | %d |" % (
+                dist, n, order, a.np, label(ra), label(rb), ra["depth"], rb["depth"],
+                statistics.median(times["choice"]), statistics.median(times[best]), ratio, len(swept)))
+            sys.stdout.flush()
+    print("\nload after %s" % " ".join(open("/proc/loadavg").read().split()[:3]))
+
+
+if __name__ == "__main__":
+    main()

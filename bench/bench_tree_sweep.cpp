@@ -5,7 +5,8 @@
 // sizes (8 .. 8192, factor --factor; leaf sizes that give the same tree as a smaller one are
 // timed once; --min-leaf skips the smaller ones); with periodic boundaries also every
 // single-level grid of k^3 cells within the engine's memory bound (k = 3 .. max_grid_cells_long,
-// at every order) with at least 2 points per cell. Single-thread CPU time per N-body evaluation (potential + gradient, sources =
+// at every order) with at least 2 points per cell. Single-thread CPU time per N-body
+// evaluation (potential + gradient, sources =
 // targets), all candidates interleaved in rotating order for --reps rounds, each timed over at
 // least --min-time seconds. Printed per case: the automatic leaf and depth, the fastest swept
 // leaf and depth, their median times, and auto / best (median over the rounds of the per-round

@@ -217,6 +217,28 @@ Configuration shifted_box(Configuration c, double L)
   return c;
 }
 
+// three atom types of masses 1, 1.5, 2 with charges equal to the masses (all positive): the
+// coulomb sum on them, times -G, is kernel gravity's
+Configuration charges_equal_to_masses(Configuration c)
+{
+  c.type_mass = {1.0, 1.5, 2.0};
+  c.type.resize(c.x.size());
+  for (size_t i = 0; i < c.x.size(); ++i) {
+    c.type[i] = 1 + (int) (i % 3);
+    c.q[i] = c.type_mass[c.type[i] - 1];
+  }
+  return c;
+}
+
+// gravity's forces and energy equal coulomb's on charges = masses times -G
+void expect_gravity_is_coulomb_times_minus_g(const Result &grav, Result coul, double G, const std::string &label)
+{
+  for (auto &[id, f] : coul.f)
+    for (double &v : f) v *= -G;
+  EXPECT_LE(relative_force_error(grav.f, coul.f), 1e-12) << label;
+  EXPECT_NEAR(grav.energy, -G * coul.energy, 1e-12 * std::fabs(coul.energy)) << label;
+}
+
 // ---------------------------------------------------------------- equal to ewald
 
 TEST_F(Periodic, NeutralRandomEqualsEwald)
@@ -457,24 +479,13 @@ TEST_F(Periodic, YukawaEqualsCoulDebyeOverImages)
 
 TEST_F(Periodic, GravityJeansEqualsCoulombWithBackground)
 {
-  Configuration c = uniform_cube(500, 49);
-  c.type_mass = {1.0, 1.5, 2.0};
-  c.type.resize(c.x.size());
-  for (size_t i = 0; i < c.x.size(); ++i) {
-    c.type[i] = 1 + (int) (i % 3);
-    c.q[i] = c.type_mass[c.type[i] - 1];    // coulomb on charges = masses (net charge)
-  }
-  load(c);
-  const double G = 0.8;
+  load(charges_equal_to_masses(uniform_cube(500, 49)));    // coulomb: net charge
   // the cube (octree) and a rectangular box (single-level grid)
   for (const char *box : {"", "change_box all y final 0 1.3 remap units box"}) {
     if (*box) command(box);
     Result coul = kifmm("1e-10", "order 12");
     Result grav = kifmm("1e-10", "kernel gravity 0.8 jeans yes order 12");
-    for (auto &[id, f] : coul.f)
-      for (double &v : f) v *= -G;
-    EXPECT_LE(relative_force_error(grav.f, coul.f), 1e-12) << box;
-    EXPECT_NEAR(grav.energy, -G * coul.energy, 1e-12 * std::fabs(coul.energy)) << box;
+    expect_gravity_is_coulomb_times_minus_g(grav, coul, 0.8, box);
   }
   // and the rectangular box's coulomb with net charge is ewald's (uniform background)
   Result ref = ewald_reference();
@@ -638,22 +649,11 @@ TEST_F(Periodic, SlabUnsupportedSettingsAreErrors)
 // (itself checked against ewald with a large slab factor above) times -G; on 1 to 4 ranks
 TEST_F(Periodic, GravitySlabEqualsCoulombOnMasses)
 {
-  Configuration c = uniform_cube(400, 72);
-  c.type_mass = {1.0, 1.5, 2.0};
-  c.type.resize(c.x.size());
-  for (size_t i = 0; i < c.x.size(); ++i) {
-    c.type[i] = 1 + (int) (i % 3);
-    c.q[i] = c.type_mass[c.type[i] - 1];    // all positive: net "charge" = total mass
-  }
-  load(c, "p p f");
+  load(charges_equal_to_masses(uniform_cube(400, 72)), "p p f");
   command("change_box all z final 0 0.7 remap units box");
-  const double G = 0.8;
   Result coul = kifmm("1e-10", "order 12");
   Result grav = kifmm("1e-10", "kernel gravity 0.8 order 12");
-  for (auto &[id, f] : coul.f)
-    for (double &v : f) v *= -G;
-  EXPECT_LE(relative_force_error(grav.f, coul.f), 1e-12);
-  EXPECT_NEAR(grav.energy, -G * coul.energy, 1e-12 * std::fabs(coul.energy));
+  expect_gravity_is_coulomb_times_minus_g(grav, coul, 0.8, "slab");
   // the plane field: the mean vertical force on the atoms above the mid-plane points down
   double fz_up = 0.0;
   int n_up = 0;

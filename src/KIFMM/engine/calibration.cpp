@@ -286,9 +286,10 @@ TreeCounts tree_counts(const Octree &tree, const InteractionLists &lists, const 
 namespace {
 // Seconds per cell of the periodic single-level grid, in ns per order: produced by
 // `OMP_NUM_THREADS=1 ./bench/calibrate --grid-cost` (bench/calibrate.cpp; the point, pair and
-// entry terms are those of kCost), 2026-12-02 (orders 3-10) and 2026-12-04 (11-14), in brackets the RMS relative residual over the
-// grids with 8 to 1000 atoms per cell at N = 3e3, 1e4, 3e4 (the per-cell work grows slowly
-// with k: the convolution is O(log k) per cell, and the spectra leave the caches).
+// entry terms are those of kCost), 2026-12-02 (orders 3-10) and 2026-12-04 (11-14), in
+// brackets the RMS relative residual over the grids with 8 to 1000 atoms per cell at N = 3e3,
+// 1e4, 3e4 (the per-cell work grows slowly with k: the convolution is O(log k) per cell, and
+// the spectra leave the caches).
 struct GridRow {
   int order;
   double cell;

@@ -515,6 +515,7 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   }
   const bool want_potential = eflag_global || eflag_atom || keep || (periodic && vflag_global);
   prepare_rigid_bodies();
+  check_pebble_dipoles();
   double comm_time = 0;
   std::size_t nsrc = 0;    // sources of all ranks (same value on every rank)
   evaluate_points(want_potential, comm_time, nsrc);
@@ -602,7 +603,8 @@ void KSpaceKIFMM::per_atom_virial(double cf, double center[3])
 
 // The pairs inside rigid bodies are not in the sum: grad has lost their gradient o (the
 // engine's virial formula used offset_a times grad: add offset_a o_b back) and their pair virial
-// 1/2 cf s T_ab goes. offset: per point, the origin the engine's formula measured x from.
+// 1/2 cf s T_ab goes. offset: per point, the origin the engine's formula measured x from; null
+// when grad still has the pairs (dipoles: the formula gave their virial, which goes).
 void KSpaceKIFMM::add_body_pair_virial(double cf, const double *offset, double *w) const
 {
   if (point_body.empty()) return;
@@ -613,7 +615,8 @@ void KSpaceKIFMM::add_body_pair_virial(double cf, const double *offset, double *
     const double *o = &body_pairs[(std::size_t) KIFMMRigidBodies::nvalues * k];
     const double s = strength[k];
     for (int a = 0; a < 3; ++a)
-      for (int b = a; b < 3; ++b) w[6 * k + slot[a][b]] += 0.5 * cf * s * (offset[3 * k + a] * o[b] - o[row[a][b]]);
+      for (int b = a; b < 3; ++b)
+        w[6 * k + slot[a][b]] += 0.5 * cf * s * ((offset ? offset[3 * k + a] * o[b] : 0.0) - o[row[a][b]]);
   }
 }
 

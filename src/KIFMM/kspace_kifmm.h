@@ -128,6 +128,8 @@ class KSpaceKIFMM : public KSpace {
   void find_rigid_bodies();
   void prepare_rigid_bodies();
   void subtract_body_pairs(bool potential);
+  void check_pebble_dipoles();
+  void charge_gradient(std::size_t k, const double *g, double gq[3]) const;
   void report_first_evaluation();
   void report_coincident_pairs(std::size_t local_pairs);
   void check_memory(std::size_t nsources);

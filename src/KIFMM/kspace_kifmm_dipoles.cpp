@@ -10,9 +10,16 @@
 // coulomb (tin-foil, as ewald/disp sums dipoles); on several ranks every rank evaluates its own
 // atoms against the sources of all ranks (gathered). The measured error covers forces and
 // torques (sampled against the exact sum; periodic: an Ewald sum).
+// Rigid clumps (fix clump/rigid): the pairs of charges inside a clump are left out as without
+// dipoles (their part of the gradient and potential, body_pairs, comes off q_i's force and
+// energy only); the induced dipoles of pebbles (fix kifmm/polarize) see every field, that of
+// their own clump too, and act on every charge and dipole. Those pairs are not constant in the
+// body frame, and their forces and torques cancel in the clump's net force and torque.
+// Permanent dipoles on pebbles are an error.
 #include "kspace_kifmm.h"
 
 #include "kifmm_polarization.h"
+#include "kifmm_rigid_bodies.h"
 
 #include "atom.h"
 #include "comm.h"
@@ -31,12 +38,14 @@ bool has_moment(const double *mu)
 {
   return mu[0] != 0.0 || mu[1] != 0.0 || mu[2] != 0.0;
 }
-// force q g + h mu and torque mu x g of a point (without the prefactor -qqrd2e)
-void dipole_force_torque(double q, const double *mu, const double *g, const double *h, double f[3], double t[3])
+// force q gq + h mu and torque mu x g of a point (without the prefactor -qqrd2e); gq: the
+// gradient the charge feels (g without the charges of its own clump)
+void dipole_force_torque(double q, const double *mu, const double *gq, const double *g, const double *h,
+                         double f[3], double t[3])
 {
-  f[0] = q * g[0] + h[0] * mu[0] + h[3] * mu[1] + h[4] * mu[2];
-  f[1] = q * g[1] + h[3] * mu[0] + h[1] * mu[1] + h[5] * mu[2];
-  f[2] = q * g[2] + h[4] * mu[0] + h[5] * mu[1] + h[2] * mu[2];
+  f[0] = q * gq[0] + h[0] * mu[0] + h[3] * mu[1] + h[4] * mu[2];
+  f[1] = q * gq[1] + h[3] * mu[0] + h[1] * mu[1] + h[5] * mu[2];
+  f[2] = q * gq[2] + h[4] * mu[0] + h[5] * mu[1] + h[2] * mu[2];
   t[0] = mu[1] * g[2] - mu[2] * g[1];
   t[1] = mu[2] * g[0] - mu[0] * g[2];
   t[2] = mu[0] * g[1] - mu[1] * g[0];
@@ -62,9 +71,29 @@ void KSpaceKIFMM::dipole_init()
   if (!atom->torque_flag)
     error->all(FLERR, "kspace_style kifmm: atoms with dipole moments need atom attribute torque "
                       "(atom_style hybrid sphere dipole)");
-  if (!bodies.empty())
-    error->all(FLERR, "kspace_style kifmm: point dipoles (atoms with a dipole moment mu) in rigid clumps "
-                      "(fix clump/rigid) are not supported in this version");
+}
+
+// Rigid clumps with dipoles (after prepare_rigid_bodies): a pebble may carry an induced dipole
+// (fix kifmm/polarize), not a permanent one.
+void KSpaceKIFMM::check_pebble_dipoles()
+{
+  if (!dipoles || point_body.empty()) return;
+  for (std::size_t k = 0; k < index.size(); ++k) {
+    const int i = index[k];
+    if (point_body[k] && has_moment(atom->mu[i]) && !(polarization && polarization->polarizable(i)))
+      error->one(FLERR,
+                 "kspace_style kifmm: atom {} of clump {} has a permanent dipole moment; pebbles of rigid clumps "
+                 "(fix clump/rigid) may carry induced dipoles (fix kifmm/polarize) only",
+                 atom->tag[i], point_body[k]);
+  }
+}
+
+// dipole mode: the gradient the charge of point k feels, g without its own clump's charges
+void KSpaceKIFMM::charge_gradient(std::size_t k, const double *g, double gq[3]) const
+{
+  const bool in_body = !point_body.empty() && point_body[k];
+  for (int d = 0; d < 3; ++d)
+    gq[d] = g[d] - (in_body ? body_pairs[(std::size_t) KIFMMRigidBodies::nvalues * k + d] : 0.0);
 }
 
 bool KSpaceKIFMM::is_point(int i) const
@@ -119,22 +148,29 @@ void KSpaceKIFMM::point_force(std::size_t k, double cf, double f[3], double t[3]
     for (int d = 0; d < 3; ++d) f[d] = cf * s * grad[3 * k + d], t[d] = 0.0;
     return;
   }
-  dipole_force_torque(s, &moment[3 * k], &grad[3 * k], &hess[6 * k], f, t);
+  double gq[3];
+  charge_gradient(k, &grad[3 * k], gq);
+  dipole_force_torque(s, &moment[3 * k], gq, &grad[3 * k], &hess[6 * k], f, t);
   for (int d = 0; d < 3; ++d) f[d] *= cf, t[d] *= cf;
 }
 
 double KSpaceKIFMM::point_energy(std::size_t k, double ce) const
 {
   double e = strength[k] * pot[k];
-  if (dipoles)
+  if (dipoles) {
+    // (without dipoles the clump's pairs are already out of pot)
+    if (!point_body.empty() && point_body[k])
+      e -= strength[k] * body_pairs[(std::size_t) KIFMMRigidBodies::nvalues * k + 3];
     for (int d = 0; d < 3; ++d) e += moment[3 * k + d] * grad[3 * k + d];
+  }
   return 0.5 * ce * e;
 }
 
 // Virial of charges and dipoles, global (virial[6]; open boundaries: the sum of x_i F_i that
 // compute() made) and/or per atom (vatom): 1/2 sum over pairs (and images) of (x_i - x_j)_a F_ij,b (kifmm::dipole_point_virial, periodic:
-// kifmm::periodic_dipole_point_virial on the single-level grid). The torques make it
-// unsymmetric; xy is r_x F_y as pair lj/cut/dipole/cut tallies it.
+// kifmm::periodic_dipole_point_virial on the single-level grid), without the pairs of charges
+// inside rigid clumps. The torques make it unsymmetric; xy is r_x F_y as pair
+// lj/cut/dipole/cut tallies it.
 void KSpaceKIFMM::dipole_virial(double cf, bool global, bool peratom)
 {
   // slabs and periodic yukawa: no dipole virial (as for periodic yukawa charges)
@@ -165,6 +201,7 @@ void KSpaceKIFMM::dipole_virial(double cf, bool global, bool peratom)
                                  grad.data(), hess.data(), cf, w.data(), center);
     }
   }
+  add_body_pair_virial(cf, nullptr, w.data());    // grad has all pairs: no offset term
   store_point_virial(w, global, peratom);
 }
 
@@ -197,7 +234,9 @@ KSpaceKIFMM::MeasuredError KSpaceKIFMM::measure_dipole_error(int nsamples)
   for (std::size_t s = 0; s < m; ++s) {
     const std::size_t k = sample[s];
     point_force(k, 1.0, f, t);
-    dipole_force_torque(strength[k], &moment[3 * k], &g[3 * s], &h[6 * s], fe, te);
+    double gq[3];
+    charge_gradient(k, &g[3 * s], gq);    // the exact sum has the clump's pairs of charges too
+    dipole_force_torque(strength[k], &moment[3 * k], gq, &g[3 * s], &h[6 * s], fe, te);
     for (int d = 0; d < 3; ++d) {
       sums[0] += (f[d] - fe[d]) * (f[d] - fe[d]);
       sums[1] += fe[d] * fe[d];

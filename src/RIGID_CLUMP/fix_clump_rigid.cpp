@@ -72,6 +72,36 @@ void check_other_rigid_fixes(LAMMPS *lmp, Fix *self, const std::string &own_rigi
   }
 }
 
+// Collective: a warning for each fix defined after the rigid fix `rigid` that adds forces to
+// atoms of the clump fix `self` (post_force: fix efield, fix addforce, ...). rigid/small sums
+// the pebble forces in its own set-up, before the set-up of later fixes adds theirs, so their
+// force is missing from the first half-step of every run.
+void warn_later_force_fixes(LAMMPS *lmp, Fix *self, Fix *rigid)
+{
+  Modify *modify = lmp->modify;
+  const int *mask = lmp->atom->mask;
+  bool after = false;
+  for (int k = 0; k < modify->nfix; ++k) {
+    Fix *other = modify->fix[k];
+    if (other == rigid) {
+      after = true;
+      continue;
+    }
+    if (!after || other->rigid_flag || !(other->setmask() & FixConst::POST_FORCE)) continue;
+    int mine = 0, any = 0;
+    for (int i = 0; i < lmp->atom->nlocal && !mine; ++i)
+      if ((mask[i] & self->groupbit) && (mask[i] & other->groupbit)) mine = 1;
+    MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_MAX, lmp->world);
+    if (any && lmp->comm->me == 0)
+      lmp->error->warning(FLERR,
+                          "Fix clump/rigid {}: fix {} {} adds forces to its pebbles but is defined after it, "
+                          "so its force is missing from the first half-step of every run (the rigid fix sums "
+                          "the pebble forces at its set-up, before later fixes add theirs); define it before "
+                          "fix clump/rigid",
+                          self->id, other->style, other->id);
+  }
+}
+
 }    // namespace
 
 /* ---------------------------------------------------------------------- */
@@ -277,6 +307,7 @@ void FixClumpRigid::init()
 {
   Fix *r = rigid_fix();
   check_other_rigid_fixes(lmp, this, id_rigid);
+  warn_later_force_fixes(lmp, this, r);
   int dim;
   // clump values are computed again in every run (charges or pebbles may have changed), and
   // the pebble counts checked again

@@ -4,8 +4,10 @@
 // coul/cut over the same clumps, whose intra-clump pairs fix clump/rigid excludes), also with
 // periodic boundaries; a spinning clump keeps its rotational energy under fix kifmm/stride; a
 // gas of dipole clumps drifts under a stride about as much as without; the requested accuracy
-// holds for the clumps' net forces and torques, also with an explicit leaf size; a clump that
-// lost pebbles is an error; an unreachable accuracy is a warning.
+// holds for the clumps' net forces and torques, also with an explicit leaf size; polarizable
+// pebbles (fix kifmm/polarize) see the field of their own clump and change nothing else; a
+// permanent dipole on a pebble, and a clump that lost pebbles, are errors; an unreachable
+// accuracy is a warning.
 #include "clump_test_util.h"
 #include "lammps_fixture.h"
 
@@ -27,7 +29,7 @@ namespace {
 // a jittered cubic lattice of spacing a, random orientations, in lj units (qqrd2e = 1)
 // (margin: free space around the lattice in the box)
 std::string dipole_gas(int n, double a, const std::string &boundary = "f f f", double margin = 0.0,
-                       unsigned seed = 7)
+                       unsigned seed = 7, const std::string &atom_style = "hybrid sphere charge")
 {
   const int side = (int) std::ceil(std::cbrt((double) n));
   const double box = side * a + margin;
@@ -35,7 +37,7 @@ std::string dipole_gas(int n, double a, const std::string &boundary = "f f f", d
   s.precision(17);
   // shrink-wrapped boundaries are set after the clumps are made (create_atoms shrinks the box)
   const bool shrink = boundary.find('s') != std::string::npos;
-  s << "units lj\natom_style hybrid sphere charge\natom_modify map array\nboundary "
+  s << "units lj\natom_style " << atom_style << "\natom_modify map array\nboundary "
     << (shrink ? "f f f" : boundary) << "\nregion box block " << -margin << ' ' << box << ' ' << -margin << ' ' << box << ' '
     << -margin << ' ' << box
     << "\ncreate_box 2 box\nfix mol all property/atom mol ghost yes\nmolecule dip "
@@ -72,6 +74,40 @@ double rel_rms(const std::map<int, std::vector<double>> &a, const std::map<int, 
     }
   }
   return std::sqrt(num / den);
+}
+
+// The pairs of charges inside the clumps of dipole_gas (3 consecutive atom IDs per clump,
+// charges -1 0 +1, lj units): per atom their force, per-atom virial 1/2 sum_j r_a F_b (xx yy zz
+// xy xz yz) and, summed, their energy and virial
+struct IntraClumpCharges {
+  std::map<int, Vec3> f;
+  std::map<int, std::array<double, 6>> v;
+  double energy = 0;
+  std::array<double, 6> virial{};
+};
+IntraClumpCharges intra_clump_charges(const std::map<int, Vec3> &x, int nclumps)
+{
+  IntraClumpCharges out;
+  const double q[3] = {-1, 0, 1};
+  const int ab[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
+  for (const auto &[id, xi] : x) out.f[id] = {0, 0, 0}, out.v[id] = {};
+  for (int c = 0; c < nclumps; ++c)
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) {
+        if (a == b) continue;
+        const int i = 3 * c + a + 1, j = 3 * c + b + 1;
+        Vec3 r, f;
+        double r2 = 0;
+        for (int d = 0; d < 3; ++d) r[d] = x.at(i)[d] - x.at(j)[d], r2 += r[d] * r[d];
+        const double rr = std::sqrt(r2);
+        for (int d = 0; d < 3; ++d) f[d] = q[a] * q[b] * r[d] / (r2 * rr), out.f[i][d] += f[d];
+        out.energy += 0.5 * q[a] * q[b] / rr;
+        for (int m = 0; m < 6; ++m) {
+          out.v[i][m] += 0.5 * r[ab[m][0]] * f[ab[m][1]];
+          out.virial[m] += 0.5 * r[ab[m][0]] * f[ab[m][1]];
+        }
+      }
+  return out;
 }
 
 class ClumpKifmm : public LammpsFixture {
@@ -263,6 +299,124 @@ TEST_F(ClumpKifmm, RequestedAccuracyHoldsForClumpForcesAndTorques)
       EXPECT_LE(et, std::atof(acc));
       EXPECT_NE(log.find("measured relative error"), std::string::npos);
     }
+}
+
+// Polarizable pebbles (fix kifmm/polarize on the pebbles of clumps, in a uniform field): the
+// induced dipoles see every field, that of their own clump too, so they equal the dipoles of the
+// same atoms without clumps; forces, energy, pressure tensor and per-atom virial differ from that
+// run by the pairs of charges inside the clumps only, and the clumps' net forces and torques
+// (pebble torques included) not at all.
+TEST_F(ClumpKifmm, PolarizablePebblesSeeTheFieldOfTheirOwnClump)
+{
+  const int nclumps = 27;
+  const std::string polarize =
+      "set group all dipole 0 0 0\nfix ef all efield 100 0 300\nfix_modify ef energy yes\n"
+      "fix pol all kifmm/polarize permittivity 10 tol 1e-12\nfix_modify pol energy yes\n"
+      "compute pea all pe/atom\ncompute sta all stress/atom NULL pair kspace\n";
+  const std::string gas = dipole_gas(nclumps, 0.04, "f f f", 0.02, 7, "hybrid sphere dipole") + polarize;
+  const std::string kspace = "pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-10";
+  commands(gas);
+  Run free = run0(kspace);
+  const auto free_mu = dipoles_by_id(lmp), free_tq = torques_by_id(), x = positions_by_id();
+  const double volume = evaluate("vol");
+  create();
+  commands(gas + clump_fix + "\n");
+  Run fmm = run0(kspace);
+  const auto mu = dipoles_by_id(lmp);
+  const IntraClumpCharges intra = intra_clump_charges(x, nclumps);
+
+  double mu_rms = 0;
+  for (const auto &[id, m] : mu) mu_rms += m[0] * m[0] + m[1] * m[1] + m[2] * m[2];
+  mu_rms = std::sqrt(mu_rms / mu.size());
+  EXPECT_GT(mu_rms, 1e-4) << "polarized by the charges of their clump (E about 1e4, alpha about 1e-7)";
+  EXPECT_LT(relative_force_error(mu, free_mu), 1e-9) << "induced dipoles";
+  std::map<int, Vec3> expect_f = free.f;
+  for (auto &[id, f] : expect_f)
+    for (int d = 0; d < 3; ++d) f[d] -= intra.f.at(id)[d];
+  EXPECT_LT(relative_force_error(fmm.f, expect_f), 1e-8) << "forces";
+  const double e_intra = intra.energy / (3 * nclumps);    // thermo pe per atom (lj units)
+  EXPECT_NEAR(fmm.energy, free.energy - e_intra, 1e-8 * std::fabs(e_intra)) << "energy";
+  double pscale = 0;
+  for (int k = 0; k < 6; ++k) pscale = std::max(pscale, std::fabs(intra.virial[k] / volume));
+  for (int k = 0; k < 6; ++k)
+    EXPECT_NEAR(fmm.p[k], free.p[k] - intra.virial[k] / volume, 1e-8 * pscale) << "pressure component " << k;
+  // per-atom stress (the negative per-atom virial) and energy
+  double num = 0, den = 0;
+  for (const auto &[id, v] : free.peratom)
+    for (int k = 1; k < 7; ++k) {
+      const double want = v[k] + intra.v.at(id)[k - 1];
+      num += (fmm.peratom.at(id)[k] - want) * (fmm.peratom.at(id)[k] - want);
+      den += want * want;
+    }
+  EXPECT_LT(std::sqrt(num / den), 1e-8) << "per-atom virial";
+  // net force and torque of each clump (rigid/small's, with the pebble torques) against the
+  // sums over its pebbles in the run without clumps, where the pairs inside it are included
+  const auto rows = clump_rows(lmp, "c");
+  ASSERT_EQ((int) rows.size(), nclumps);
+  double fnum = 0, fden = 0, tnum = 0, tden = 0;
+  for (const auto &[mol, row] : rows) {
+    const int first = 3 * (mol - 1) + 1;
+    Vec3 fsum{0, 0, 0}, tsum{0, 0, 0};
+    for (int i = first; i < first + 3; ++i) {
+      const Vec3 &f = free.f.at(i), &t = free_tq.at(i);
+      double r[3];
+      for (int d = 0; d < 3; ++d) r[d] = x.at(i)[d] - row[clump_test::X + d];
+      for (int d = 0; d < 3; ++d) fsum[d] += f[d];
+      tsum[0] += r[1] * f[2] - r[2] * f[1] + t[0];
+      tsum[1] += r[2] * f[0] - r[0] * f[2] + t[1];
+      tsum[2] += r[0] * f[1] - r[1] * f[0] + t[2];
+    }
+    for (int d = 0; d < 3; ++d) {
+      fnum += std::pow(row[clump_test::FX + d] - fsum[d], 2), fden += fsum[d] * fsum[d];
+      tnum += std::pow(row[clump_test::TQX + d] - tsum[d], 2), tden += tsum[d] * tsum[d];
+    }
+  }
+  EXPECT_LT(std::sqrt(fnum / fden), 1e-8) << "net forces of the clumps";
+  EXPECT_LT(std::sqrt(tnum / tden), 1e-8) << "net torques of the clumps";
+}
+
+// Clumps of polarizable pebbles turning in a uniform field (fix clump/rigid integrates them): the
+// total energy (clumps' kinetic energy, kspace, fix efield and polarization energies) is
+// conserved as velocity Verlet conserves a true potential energy, its deviation falling as
+// dt^2, far below the kinetic energy the clumps gain.
+TEST_F(ClumpKifmm, PolarizablePebblesConserveTheEnergyOfTurningClumps)
+{
+  auto deviation = [&](double dt, double &ke) {
+    create();
+    commands(dipole_gas(27, 0.06, "f f f", 0.02, 7, "hybrid sphere dipole") +
+             "set group all dipole 0 0 0\nfix ef all efield 100 0 300\nfix_modify ef energy yes\n" + clump_fix + " integrator nve\n"
+             "fix pol all kifmm/polarize permittivity 10 tol 1e-11\nfix_modify pol energy yes\n"
+             "pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-9\n"
+             "variable etot equal f_c[4]+pe\nthermo_style custom step pe f_c[4] v_etot\nthermo_modify norm no\n"
+             "run 0 post no");
+    char ts[64];
+    std::snprintf(ts, sizeof ts, "timestep %.17g", dt);
+    command(ts);
+    const double e0 = evaluate("v_etot");
+    double maxdev = 0;
+    const int steps = (int) std::lround(5e-5 / dt);
+    for (int k = 0; k < 4; ++k) {
+      command("run " + std::to_string(steps) + " post no");
+      maxdev = std::max(maxdev, std::fabs(evaluate("v_etot") - e0));
+    }
+    ke = evaluate("f_c[4]");
+    return maxdev;
+  };
+  double ke = 0, ke_half = 0;
+  const double dev = deviation(1e-6, ke), dev_half = deviation(5e-7, ke_half);
+  std::printf("  total energy deviation: %.2e at dt 1e-6, %.2e at dt 5e-7; kinetic energy gained %.3e\n", dev,
+              dev_half, ke_half);
+  EXPECT_LE(dev_half, dev / 3);
+  EXPECT_GT(ke_half, 1000 * dev_half);
+}
+
+// A permanent dipole moment on a pebble: an error naming the atom and its clump.
+TEST_F(ClumpKifmm, PermanentDipoleOnAPebbleIsAnError)
+{
+  commands(dipole_gas(8, 0.05, "f f f", 0.0, 7, "hybrid sphere dipole") + clump_fix +
+           "\nset group all dipole 0 0 0\nset atom 5 dipole 0 0 0.1\n"
+           "pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-5\n");
+  EXPECT_LAMMPS_ERROR(command("run 0 post no"), "atom 5 of clump 2 has a permanent dipole moment");
 }
 
 // Pebbles deleted from a clump after its mass properties were computed: an error naming the

@@ -406,6 +406,33 @@ run 0
   EXPECT_GT(phi, 0.5);    // it turned a lot
 }
 
+// A fix that adds forces to the pebbles defined after fix clump/rigid: rigid/small sums the
+// pebble forces at its set-up, before that fix's set-up adds its force, so the first half-step
+// of every run lacks it: a warning that says to define it first; and a run split in two equals
+// the unsplit run only in that order.
+TEST_F(FixClumpRigidTest, ForceFixAfterTheClumpFixIsAWarning)
+{
+  auto run = [&](bool field_first, bool split) {
+    create();
+    commands(box_commands());
+    commands("molecule dip " + potentials + "/dipole3.mol\ncreate_atoms 0 single 0 0 0 mol dip 11 rotate 0 0 0 1\n"
+             "pair_style zero 0.02\npair_coeff * *\ntimestep 1e-4\n");
+    const std::string field = "fix ef all efield 0.0 1.0e-3 0.0\n", clumps = "fix c all clump/rigid density 2500\n";
+    commands(field_first ? field + clumps : clumps + field);
+    const std::string log = captured(split ? "run 200 post no\nrun 200 post no" : "run 400 post no");
+    return std::make_pair(log, positions_by_id());
+  };
+  const auto [log_after, x_after] = run(false, true);
+  EXPECT_NE(log_after.find("WARNING: Fix clump/rigid c: fix efield ef adds forces to its pebbles but is defined "
+                           "after it"),
+            std::string::npos)
+      << log_after;
+  const auto [log_first, x_first] = run(true, true);
+  EXPECT_EQ(log_first.find("defined after it"), std::string::npos) << log_first;
+  EXPECT_LT(kifmm_test::relative_force_error(x_first, run(true, false).second), 1e-12);
+  EXPECT_GT(kifmm_test::relative_force_error(x_after, run(false, false).second), 1e-9);
+}
+
 // A clump with net charge Q in a uniform field accelerates with Q E / M_union.
 TEST_F(FixClumpRigidTest, ChargedClumpAcceleratesWithUnionMass)
 {

@@ -4,6 +4,7 @@
 // correction, and the single-level grid against that reference.
 #include "periodic.h"
 
+#include "cost_model.h"
 #include "fmm_core.h"
 #include "test_util.h"
 
@@ -169,6 +170,61 @@ TEST(PeriodicSlab, LayerOnTheFloor)
   const SlabErrors e = slab_errors(o, p, slab_reference(o, p));
   std::printf("  slab grid floor layer p=8: pot %.2e grad %.2e\n", e.pot, e.grad);
   EXPECT_LT(e.grad, 1e-6);
+}
+
+// The grid of a slab chosen from the points (choose_tree on the actual cell occupancies, open in
+// z): uniform points get a grid next to the uniform model's; a heap of sediment on 1/16 of the
+// floor fills few cells densely, so the choice takes more cells (fewer points per cell) than the
+// uniform model of the same N, at a lower modelled cost on those points, and it meets the
+// accuracy there. (A layer over the whole floor changes the in-plane occupancy little: cells
+// are nearly cubic, so there the choice is the uniform one.) plan_tree asks for the choice from
+// the points on one process only.
+TEST(PeriodicSlab, GridChosenFromTheOccupancies)
+{
+  const double c[3] = {0, 0, 0}, shape[3] = {1.0, 1.0, 0.5};
+  const std::size_t n = 20000;
+  kifmm::Options o = slab_options(6, 0, c, 1.0, shape);
+  const kifmm::TreeChoice u = kifmm::choose_slab_grid(6, n, shape);
+  const Points flat = slab_points(n, 5, c, 1.0, shape);
+  const kifmm::TreeChoice cu = kifmm::choose_tree(KernelSpec{}, o, n, flat.xyz.data());
+  EXPECT_LE(std::abs(cu.grid - u.grid), 1) << "uniform points: " << cu.grid << " against the model's " << u.grid;
+  Points sed = slab_points(n, 6, c, 1.0, shape);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double r = (sed.xyz[3 * i + 2] + 0.5);    // in [0, 1): a layer dense at the floor
+    sed.xyz[3 * i + 2] = -0.5 + 0.1 * r * r;
+    for (int d = 0; d < 2; ++d) sed.xyz[3 * i + d] = -1.0 + 0.25 * (sed.xyz[3 * i + d] + 1.0);    // on 1/16 of it
+  }
+  const kifmm::TreeChoice cs = kifmm::choose_tree(KernelSpec{}, o, n, sed.xyz.data());
+  auto cost_on_sediment = [&](int k) {
+    return kifmm::modelled_grid_cost(6, n, kifmm::grid_counts(n, sed.xyz.data(), c, 1.0, k, shape, true));
+  };
+  std::printf("  slab 1 x 1 x 0.5, %zu points, order 6: uniform model grid %d; from uniform points %d; "
+              "heap %d (modelled %.3g s, the uniform model's grid %.3g s)\n",
+              n, u.grid, cu.grid, cs.grid, cs.cost, cost_on_sediment(u.grid));
+  EXPECT_GT(cs.grid, u.grid);
+  EXPECT_NEAR(cs.cost, cost_on_sediment(cs.grid), 1e-12 * cs.cost);
+  EXPECT_LT(cs.cost, 0.9 * cost_on_sediment(u.grid));
+  for (int k = 3; k <= kifmm::max_grid_cells_long(6, shape); ++k)
+    if (kifmm::grid_fits_cell(6, k, shape, true)) EXPECT_GE(cost_on_sediment(k), cs.cost) << "grid " << k;
+  // the chosen grid meets order 6's accuracy on the heap (a smaller sample of it)
+  const std::size_t m = 800;
+  Points few = sed;
+  few.xyz.resize(3 * m);
+  few.q.resize(m);
+  few = neutral(few);
+  kifmm::Options chosen = o;
+  chosen.periodic_grid = cs.grid;
+  const SlabErrors e = slab_errors(chosen, few, slab_reference(chosen, few));
+  EXPECT_LT(e.grad, 1e-4);
+  // plan_tree: from the points on one process, with the grid in use kept until then
+  const kifmm::TreePlan one = kifmm::plan_tree(o, kifmm::TreeRequest{n, 0, -1, false});
+  EXPECT_TRUE(one.from_points);
+  EXPECT_EQ(one.options.periodic_grid, u.grid);
+  EXPECT_FALSE(kifmm::plan_tree(o, kifmm::TreeRequest{n, 0, -1, true}).from_points);
+  EXPECT_FALSE(kifmm::plan_tree(o, kifmm::TreeRequest{n, 0, 7, false}).from_points);
+  kifmm::Options current = o;
+  current.periodic_grid = cs.grid;
+  EXPECT_EQ(kifmm::plan_tree(o, kifmm::TreeRequest{n, 0, -1, false}, &current).options.periodic_grid, cs.grid);
 }
 
 TEST(PeriodicSlab, WhatIsNotSupportedThrows)

@@ -324,21 +324,23 @@ TreeCounts uniform_grid_counts(std::size_t n, int k, const double *shape)
 }
 
 TreeCounts grid_counts(std::size_t n, const double *xyz, const double center[3], double half_width, int k,
-                       const double *shape)
+                       const double *shape, bool open_z)
 {
   int kd[3];
-  grid_cells_per_axis(k, shape, kd);
+  grid_cells_per_axis(k, shape, kd, open_z);
   const int kc = kd[0] * kd[1] * kd[2];
   std::vector<double> occ(kc, 0.0);
   for (std::size_t i = 0; i < n; ++i) occ[grid_cell_index(xyz + 3 * i, center, half_width, shape, kd)] += 1;
   TreeCounts t;
-  t.cells = kc;
+  t.cells = open_z ? 2.0 * kc : kc;    // a slab: the convolution zero-padded along z
   t.entries = 14.0 * kc;
   for (int b = 0; b < kc; ++b) {
     if (occ[b] == 0) continue;
     for (int o = 0; o < 27; ++o) {
+      const int dz = o % 3 - 1, az = b % kd[2] + dz;
+      if (open_z && (az < 0 || az >= kd[2])) continue;    // no images along z
       signed char sh[3];
-      t.near_pairs += occ[b] * occ[grid_neighbour_cell(b, kd, o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, sh)] / 2;
+      t.near_pairs += occ[b] * occ[grid_neighbour_cell(b, kd, o / 9 - 1, (o / 3) % 3 - 1, dz, sh)] / 2;
     }
     t.self_pairs += occ[b] * occ[b] / 2;
   }
@@ -523,7 +525,27 @@ TreeChoice model_tree(const KernelSpec &kernel, const Options &options, std::siz
 
 TreeChoice choose_tree(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz)
 {
-  if (options.periodic && options.periodic_dims == 2) return choose_slab_grid(options.order, n, options.root_shape);
+  if (options.periodic && options.periodic_dims == 2) {
+    // a slab: the grid of least modelled cost on the actual occupancies (a sediment on the
+    // floor fills the lowest cells: more cells than for uniform points of the same number)
+    const TreeChoice uniform = choose_slab_grid(options.order, n, options.root_shape);
+    if (n == 0) return uniform;
+    const ChoicePoints pts(kernel, options, n, xyz);
+    TreeChoice g = uniform;
+    g.grid = 0;
+    for (int k = 3; k <= max_grid_cells_long(options.order, options.root_shape); ++k) {
+      if (!grid_fits_cell(options.order, k, options.root_shape, true)) continue;
+      const double c = modelled_grid_cost(options.order, n,
+                                          grid_counts(n, pts.xyz, options.root_center, options.root_half_width, k,
+                                                      options.root_shape, true),
+                                          options.near_pair_weight);
+      if (g.grid == 0 || c < g.cost) {
+        g.cost = c;
+        g.grid = k;
+      }
+    }
+    return g;
+  }
   const double *shape = options.fixed_root ? options.root_shape : nullptr;
   if (options.periodic && shape && !octree_fits_cell(shape)) {
     // only grids: the one of least modelled cost on the actual occupancies

@@ -105,8 +105,10 @@ TreeCounts actual_tree_counts(const KernelSpec &kernel, const Options &options, 
 // shape: a rectangular periodic cell (grid_cells_per_axis; null: a cube).
 TreeCounts uniform_grid_counts(std::size_t n, int k, const double *shape = nullptr);
 // The same for points wrapped into the cell [center - h, center + h)^3 (actual occupancies).
+// open_z: a slab (periodic in x and y only: no neighbours across the z faces, the convolution
+// over twice the cells).
 TreeCounts grid_counts(std::size_t n, const double *xyz, const double center[3], double half_width, int k,
-                       const double *shape = nullptr);
+                       const double *shape = nullptr, bool open_z = false);
 double grid_cell_cost(int order);    // seconds
 double modelled_grid_cost(int order, std::size_t n, const TreeCounts &counts, double pair_weight = 1.0);
 // Largest grid (cells per side) offered at this order: its kernels (periodic_grid.h) and the

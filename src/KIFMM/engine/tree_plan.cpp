@@ -20,11 +20,16 @@ TreePlan plan_tree(const Options &options, const TreeRequest &request, const Opt
   plan.options = options;
   Options &opt = plan.options;
   opt.periodic_grid = options.periodic && request.grid > 0 ? request.grid : 0;
-  if (options.periodic && options.periodic_dims == 2) {    // a slab: the grid only, for uniform points
+  if (options.periodic && options.periodic_dims == 2) {    // a slab: the grid only
     if (request.leaf_size > 0) opt.leaf_size = request.leaf_size;
     if (request.grid <= 0) {
       plan.uniform = choose_slab_grid(opt.order, request.n, opt.root_shape);
       opt.periodic_grid = plan.uniform.grid;
+      // one rank: chosen again on the actual occupancies (kept when the same as before)
+      plan.from_points = !request.distributed && request.grid < 0;
+      if (plan.from_points && current && current->order == opt.order && current->periodic == opt.periodic &&
+          current->periodic_dims == 2 && current->periodic_grid > 0)
+        opt.periodic_grid = current->periodic_grid;
     }
     return plan;
   }

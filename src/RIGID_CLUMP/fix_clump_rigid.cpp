@@ -44,21 +44,27 @@ const char *const LOCAL_COLUMNS =
     "id mol mass x y z xu yu zu vx vy vz fx fy fz tqx tqy tqz omegax omegay omegaz "
     "angmomx angmomy angmomz quatw quati quatj quatk inertiax inertiay inertiaz";
 
+// Collective: whether some atom is in the groups of both fixes.
+bool share_atoms(LAMMPS *lmp, const Fix *a, const Fix *b)
+{
+  const int *mask = lmp->atom->mask;
+  int mine = 0, any = 0;
+  for (int i = 0; i < lmp->atom->nlocal && !mine; ++i)
+    if ((mask[i] & a->groupbit) && (mask[i] & b->groupbit)) mine = 1;
+  MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_MAX, lmp->world);
+  return any != 0;
+}
+
 // Collective: an error when another rigid-body fix (style rigid...) has atoms of the clump fix
 // `self` in its group (both would integrate them). `own_rigid` is the ID of self's internal
 // rigid fix; the internal rigid fix of another fix clump/rigid is named by that fix.
 void check_other_rigid_fixes(LAMMPS *lmp, Fix *self, const std::string &own_rigid)
 {
   Modify *modify = lmp->modify;
-  const int *mask = lmp->atom->mask;
   for (int k = 0; k < modify->nfix; ++k) {
     Fix *other = modify->fix[k];
     if (other == self || own_rigid == other->id || !utils::strmatch(other->style, "^rigid")) continue;
-    int mine = 0, any = 0;
-    for (int i = 0; i < lmp->atom->nlocal && !mine; ++i)
-      if ((mask[i] & self->groupbit) && (mask[i] & other->groupbit)) mine = 1;
-    MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_MAX, lmp->world);
-    if (!any) continue;
+    if (!share_atoms(lmp, self, other)) continue;
     Fix *named = other;
     for (int j = 0; j < modify->nfix; ++j)
       if (strcmp(modify->fix[j]->style, "clump/rigid") == 0 &&
@@ -79,7 +85,6 @@ void check_other_rigid_fixes(LAMMPS *lmp, Fix *self, const std::string &own_rigi
 void warn_later_force_fixes(LAMMPS *lmp, Fix *self, Fix *rigid)
 {
   Modify *modify = lmp->modify;
-  const int *mask = lmp->atom->mask;
   bool after = false;
   for (int k = 0; k < modify->nfix; ++k) {
     Fix *other = modify->fix[k];
@@ -88,11 +93,7 @@ void warn_later_force_fixes(LAMMPS *lmp, Fix *self, Fix *rigid)
       continue;
     }
     if (!after || other->rigid_flag || !(other->setmask() & FixConst::POST_FORCE)) continue;
-    int mine = 0, any = 0;
-    for (int i = 0; i < lmp->atom->nlocal && !mine; ++i)
-      if ((mask[i] & self->groupbit) && (mask[i] & other->groupbit)) mine = 1;
-    MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_MAX, lmp->world);
-    if (any && lmp->comm->me == 0)
+    if (share_atoms(lmp, self, other) && lmp->comm->me == 0)
       lmp->error->warning(FLERR,
                           "Fix clump/rigid {}: fix {} {} adds forces to its pebbles but is defined after it, "
                           "so its force is missing from the first half-step of every run (the rigid fix sums "

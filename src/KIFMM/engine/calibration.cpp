@@ -506,6 +506,26 @@ TreeChoice model_leaf(const ChoicePoints &pts, const Options &o, std::size_t n, 
   const TreeCounts t = counts_of_leaf(pts, o, n, leaf, &depth);
   return TreeChoice{leaf, depth, modelled_cost(o.order, n, t, o.near_pair_weight)};
 }
+
+// The periodic single-level grid of least modelled cost on the actual cell occupancies, among
+// those whose cells fit the cell of the options (open_z: a slab); leaf: the choice's leaf size.
+TreeChoice grid_on_points(const KernelSpec &kernel, const Options &o, std::size_t n, const double *xyz, int leaf,
+                          bool open_z)
+{
+  const ChoicePoints pts(kernel, o, n, xyz);
+  TreeChoice g{leaf, 0, 0.0, 0};
+  for (int k = 3; k <= max_grid_cells_long(o.order, o.root_shape); ++k) {
+    if (!grid_fits_cell(o.order, k, o.root_shape, open_z)) continue;
+    const double c = modelled_grid_cost(
+        o.order, n, grid_counts(n, pts.xyz, o.root_center, o.root_half_width, k, o.root_shape, open_z),
+        o.near_pair_weight);
+    if (g.grid == 0 || c < g.cost) {
+      g.cost = c;
+      g.grid = k;
+    }
+  }
+  return g;
+}
 }    // namespace
 
 TreeCounts actual_tree_counts(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz,
@@ -526,43 +546,16 @@ TreeChoice model_tree(const KernelSpec &kernel, const Options &options, std::siz
 TreeChoice choose_tree(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz)
 {
   if (options.periodic && options.periodic_dims == 2) {
-    // a slab: the grid of least modelled cost on the actual occupancies (a sediment on the
-    // floor fills the lowest cells: more cells than for uniform points of the same number)
+    // a slab: only grids (heaped atoms fill few cells densely: more cells than for uniform
+    // points of the same number)
     const TreeChoice uniform = choose_slab_grid(options.order, n, options.root_shape);
-    if (n == 0) return uniform;
-    const ChoicePoints pts(kernel, options, n, xyz);
-    TreeChoice g = uniform;
-    g.grid = 0;
-    for (int k = 3; k <= max_grid_cells_long(options.order, options.root_shape); ++k) {
-      if (!grid_fits_cell(options.order, k, options.root_shape, true)) continue;
-      const double c = modelled_grid_cost(options.order, n,
-                                          grid_counts(n, pts.xyz, options.root_center, options.root_half_width, k,
-                                                      options.root_shape, true),
-                                          options.near_pair_weight);
-      if (g.grid == 0 || c < g.cost) {
-        g.cost = c;
-        g.grid = k;
-      }
-    }
-    return g;
+    return n == 0 ? uniform : grid_on_points(kernel, options, n, xyz, uniform.leaf_size, true);
   }
   const double *shape = options.fixed_root ? options.root_shape : nullptr;
-  if (options.periodic && shape && !octree_fits_cell(shape)) {
-    // only grids: the one of least modelled cost on the actual occupancies
-    const ChoicePoints pts(kernel, options, n, xyz);
-    TreeChoice g{choose_tree(options.order, n, false, false, nullptr, options.near_pair_weight).leaf_size, 0, 0.0, 0};
-    for (int k = 3; k <= max_grid_cells_long(options.order, shape); ++k) {
-      if (!grid_fits_cell(options.order, k, shape)) continue;
-      const double c = modelled_grid_cost(
-          options.order, n, grid_counts(n, pts.xyz, options.root_center, options.root_half_width, k, shape),
-          options.near_pair_weight);
-      if (g.grid == 0 || c < g.cost) {
-        g.cost = c;
-        g.grid = k;
-      }
-    }
-    return g;
-  }
+  if (options.periodic && shape && !octree_fits_cell(shape))    // only grids
+    return grid_on_points(kernel, options, n, xyz,
+                          choose_tree(options.order, n, false, false, nullptr, options.near_pair_weight).leaf_size,
+                          false);
   const TreeChoice uniform = choose_tree(options.order, n, options.periodic, false, nullptr, options.near_pair_weight);
   if (n == 0) return uniform;
   // candidates, largest first: leaf sizes not below the uniform choice's (the uniform depths

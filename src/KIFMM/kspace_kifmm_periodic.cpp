@@ -1,5 +1,5 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
-// Periodic boundaries of kspace_style kifmm (boundary p p p, any orthogonal box): checks at
+// Periodic boundaries of kspace_style kifmm (boundary p p p, any orthogonal box; p p f): checks at
 // init, the periodic cell handed to the engine at every evaluation (boxes that change size or
 // shape), the tree or grid that fits the box, the virial. The lattice sums themselves are in the
 // engine (engine/periodic.h, engine/periodic_grid.h).
@@ -78,18 +78,16 @@ void KSpaceKIFMM::periodic_init()
                "density is not zero); use 'kspace_modify kifmm jeans yes' to subtract it "
                "(uniform negative background, Jeans swindle)");
   periodic_cell();
-  // p p p with coulomb or gravity: the full virial tensor (periodic_tensor_virial), unless
+  // coulomb or gravity (p p p and slabs): the full virial tensor (periodic_tensor_virial), unless
   // 'kspace_modify pressure/scalar yes' asks for the trace only (exact and free: the energy).
-  // Slabs and yukawa: only the trace (periodic_virial); LAMMPS's flag for scalar-only kspace
-  // pressures makes compute pressure refuse tensor components (thermo pxx, fix npt/nph aniso or
-  // tri, fix box/relax aniso, ...) instead of using wrong ones
-  const bool tensor_possible = !slab && kset.kernel != LongRangeKernel::Yukawa;
+  // Yukawa: not computed; LAMMPS's flag for scalar-only kspace pressures makes compute pressure
+  // refuse tensor components (thermo pxx, fix npt/nph aniso or tri, fix box/relax aniso, ...)
+  // instead of using wrong ones
+  const bool tensor_possible = kset.kernel != LongRangeKernel::Yukawa;
   if (scalar_pressure_user == 0 && !tensor_possible)
     error->all(FLERR,
-               "kspace_style kifmm: 'kspace_modify pressure/scalar no' is not available with {}: only "
-               "the trace of the periodic virial (the scalar pressure) is computed there, not its "
-               "tensor components",
-               slab ? "a slab (boundary p p f)" : "kernel yukawa");
+               "kspace_style kifmm: 'kspace_modify pressure/scalar no' is not available with kernel "
+               "yukawa and periodic boundaries: its periodic virial is not computed");
   scalar_pressure_flag = scalar_pressure_written = (tensor_possible && scalar_pressure_user != 1) ? 0 : 1;
   // net charge of a slab: no background, the doubly periodic sum of the charges as they are
   if (slab && std::fabs(qsum) > 1.0e-5 && comm->me == 0)
@@ -253,11 +251,13 @@ void KSpaceKIFMM::periodic_cell()
                    update->ntimestep, domain->xprd, domain->yprd, domain->zprd, was, grid_cells_text(refit));
 }
 
-// Global virial of the periodic system. Coulomb and gravity are homogeneous of degree -1 in all
-// lengths (positions and cell; the tin-foil sum and the background term included), so the trace
-// of the virial equals the energy: W_xx = W_yy = W_zz = U/3 gives the exact scalar pressure.
-// The anisotropic part is not computed: scalar_pressure_flag = 1 (periodic_init) makes LAMMPS's
-// compute pressure stop when tensor components are asked for. Yukawa: not computed (0, warning).
+// Global virial of the periodic system when only the trace is computed (pressure/scalar yes).
+// Coulomb and gravity are homogeneous of degree -1 in all lengths (positions and cell; the
+// tin-foil sum and the background term included, and the doubly periodic sum of a slab), so the
+// trace of the virial equals the energy: W_xx = W_yy = W_zz = U/3 gives the exact scalar
+// pressure. The anisotropic part is not computed: scalar_pressure_flag = 1 (periodic_init) makes
+// LAMMPS's compute pressure stop when tensor components are asked for. Yukawa: not computed (0,
+// warning).
 void KSpaceKIFMM::periodic_virial(double e_local)
 {
   for (int k = 0; k < 6; ++k) virial[k] = 0.0;
@@ -274,10 +274,10 @@ void KSpaceKIFMM::periodic_virial(double e_local)
   virial[0] = virial[1] = virial[2] = u / 3.0;
 }
 
-// The full tensor is computed for p p p with coulomb or gravity unless pressure/scalar yes.
+// The full tensor is computed for p p p and slabs with coulomb or gravity unless pressure/scalar yes.
 bool KSpaceKIFMM::periodic_tensor() const
 {
-  return periodic && !slab && kset.kernel != LongRangeKernel::Yukawa && scalar_pressure_flag == 0;
+  return periodic && kset.kernel != LongRangeKernel::Yukawa && scalar_pressure_flag == 0;
 }
 
 // The evaluator of the virial tensor: the engine when it is the single-level grid; next to the

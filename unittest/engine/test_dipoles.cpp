@@ -406,6 +406,52 @@ TEST(Dipoles, PeriodicVirialIsTheStrainDerivative)
   }
 }
 
+// the slab virial of charges and dipoles: against strain derivatives of the slab energy, taken
+// as the 3-d Ewald energy of the cell with a vacuum of 14 cell widths in z plus the correction
+// of Yeh and Berkowitz, 2 pi M_z^2 / V (M the total dipole moment, charges' and point dipoles'):
+// for neutral charges that is the doubly periodic energy up to terms that decay as exp(-k gap).
+// x, y: the cell and the positions stretched; z: the positions (the vacuum stays).
+TEST(Dipoles, SlabVirialIsTheStrainDerivative)
+{
+  const double shape[3] = {1.0, 0.7, 0.5};
+  Points pts = uniform_cube(120, 73);
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    for (int d = 0; d < 3; ++d) pts.xyz[3 * i + d] *= shape[d];
+  Dipoles s = random_dipoles(neutral(pts), 74, true);
+  const std::size_t n = s.p.size();
+  kifmm::Options o = periodic_options(12, 32, 1.0, nullptr, kifmm::choose_slab_grid(12, n, shape).grid);
+  o.periodic_dims = 2;
+  for (int d = 0; d < 3; ++d) o.root_shape[d] = shape[d];
+  auto ev = kifmm::make_evaluator({}, o);
+  const Field f = fmm(*ev, s);
+  std::vector<double> v(6 * n);
+  kifmm::periodic_dipole_point_virial(*ev, n, s.p.xyz.data(), s.p.q.data(), s.mu.data(), n, s.p.xyz.data(),
+                                      s.p.q.data(), s.mu.data(), f.grad.data(), f.hess.data(), -1.0, v.data());
+  double W[6] = {0, 0, 0, 0, 0, 0};
+  for (std::size_t k = 0; k < n; ++k)
+    for (int m = 0; m < 6; ++m) W[m] += v[6 * k + m];
+  auto slab_energy = [&](const Dipoles &t, const double Lt[3]) {
+    double Mz = 0;
+    for (std::size_t k = 0; k < n; ++k) Mz += t.p.q[k] * t.p.xyz[3 * k + 2] + t.mu[3 * k + 2];
+    return ewald_energy(t, Lt) + 2 * kPi * Mz * Mz / (Lt[0] * Lt[1] * Lt[2]);
+  };
+  const double L[3] = {2.0, 2.0 * shape[1], 2.0 * shape[2] + 28.0};
+  const double eps = 1e-5;
+  for (int a = 0; a < 3; ++a) {
+    double de[2];
+    for (int sg : {1, -1}) {
+      Dipoles t = s;
+      double Lt[3] = {L[0], L[1], L[2]};
+      if (a < 2) Lt[a] *= 1 + sg * eps;
+      for (std::size_t k = 0; k < n; ++k) t.p.xyz[3 * k + a] *= 1 + sg * eps;
+      de[sg > 0 ? 0 : 1] = slab_energy(t, Lt);
+    }
+    const double dU = (de[0] - de[1]) / (2 * eps);
+    std::printf("slab: W_%d%d %.10f, -dU/de %.10f\n", a, a, W[a], -dU);
+    EXPECT_NEAR(W[a], -dU, 1e-7 * (std::fabs(W[0]) + std::fabs(W[1]) + std::fabs(W[2]))) << "axis " << a;
+  }
+}
+
 }    // namespace
 
 namespace {

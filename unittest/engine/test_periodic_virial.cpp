@@ -3,7 +3,8 @@
 // Laplace): per point against an Ewald sum of the pair virial written here (real-space and
 // reciprocal parts of sum_n (r_n)_a dG/dr_b(r_n), with the background constant), its trace
 // against the energy, its diagonal against numerical derivatives of the exact energy under
-// small anisotropic strains; cubic and rectangular boxes, neutral and charged.
+// small anisotropic strains; cubic and rectangular boxes, neutral and charged; slabs (p p f)
+// against the doubly periodic Ewald sum and the strain derivatives of its energy.
 #include "periodic.h"
 
 #include "fmm_core.h"
@@ -189,6 +190,108 @@ TEST(PeriodicVirial, TraceIsTheEnergyAndDiagonalIsTheStrainDerivative)
   }
   // anisotropic: the diagonal components differ
   EXPECT_GT(std::fabs(W[0] - W[1]) + std::fabs(W[1] - W[2]), 1e-3 * std::fabs(U));
+}
+
+// ---------------------------------------------------------------- slabs (p p f)
+
+kifmm::Options slab_grid_options(int order, std::size_t n, double h, const double c[3], const double shape[3])
+{
+  kifmm::Options o = grid_options(order, kifmm::choose_slab_grid(order, n, shape).grid, h, c, shape);
+  o.periodic_dims = 2;
+  return o;
+}
+
+// Per point, against references independent of the grid: the components with a z index from
+// the doubly periodic Ewald sum (no images in z: v_i,zb = 1/2 q_i sum_j q_j (z_i - z_j) d_b G_2 =
+// 1/2 q_i (z_i g_b[q] - g_b[q z])); v_xy against the 3-d Ewald point virial of the cell with a
+// vacuum of 14 cell widths in z (the tin-foil sum differs from the slab by a uniform field along
+// z, which has no xy part, and by images whose fields decay as exp(-k gap)).
+TEST(PeriodicVirial, SlabPerPointEqualsTheDoublyPeriodicSum)
+{
+  const double c[3] = {0.1, -0.2, 0.3}, h = 1.0, shape[3] = {1.0, 0.8, 0.4};
+  Points p = case_points(300, 17, c, h, shape, 0.0);
+  double Q = 0;
+  for (double q : p.q) Q += q;
+  for (double &q : p.q) q -= Q / p.size();    // neutral (the 3-d reference's own convention for Q)
+  const std::size_t n = p.size();
+  const kifmm::Options o = slab_grid_options(10, n, h, c, shape);
+  const std::vector<double> v = fmm_point_virial(o, p);
+  // z components
+  std::vector<double> qz(n), g(3 * n), gz(3 * n);
+  for (std::size_t i = 0; i < n; ++i) qz[i] = p.q[i] * p.xyz[3 * i + 2];
+  kifmm::slab_direct_sum(c, h, shape, n, p.xyz.data(), p.q.data(), n, p.xyz.data(), nullptr, g.data());
+  kifmm::slab_direct_sum(c, h, shape, n, p.xyz.data(), qz.data(), n, p.xyz.data(), nullptr, gz.data());
+  std::vector<double> vz(3 * n), rz(3 * n);
+  const int zm[3] = {4, 5, 2};    // xz, yz, zz
+  for (std::size_t i = 0; i < n; ++i)
+    for (int b = 0; b < 3; ++b) {
+      vz[3 * i + b] = v[6 * i + zm[b]];
+      rz[3 * i + b] = 0.5 * p.q[i] * (p.xyz[3 * i + 2] * g[3 * i + b] - gz[3 * i + b]);
+    }
+  const double ez = rel_l2(vz, rz);
+  // xy
+  const double L[3] = {2 * h * shape[0], 2 * h * shape[1], 2 * h * shape[2] + 14 * 2 * h * shape[0]};
+  const std::vector<double> ref = ewald_point_virial(p, L);
+  std::vector<double> vxy(n), rxy(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    vxy[i] = v[6 * i + 3];
+    rxy[i] = ref[6 * i + 3];
+  }
+  const double exy = rel_l2(vxy, rxy);
+  std::printf("  slab per-point virial: z components %.2e, xy %.2e\n", ez, exy);
+  EXPECT_LT(ez, 1e-6);
+  EXPECT_LT(exy, 1e-6);
+  double sxy = 0, sd = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    sxy += std::fabs(rxy[i]);
+    sd += std::fabs(v[6 * i]);
+  }
+  EXPECT_GT(sxy, 1e-2 * sd) << "the xy part is not small";
+}
+
+// The global slab virial: trace = energy (degree -1), W_aa = -dU/d(strain_aa) by central
+// differences of the doubly periodic Ewald energy (x, y: the cell and the points; z: the
+// points), neutral and with a net charge (taken without background).
+TEST(PeriodicVirial, SlabDiagonalIsTheStrainDerivative)
+{
+  const double c[3] = {0, 0, 0}, h = 1.0, shape[3] = {1.0, 0.7, 0.5};
+  for (double shift : {0.0, 0.08}) {
+    Points p = case_points(200, 23, c, h, shape, 0.0);
+    double Q = 0;
+    for (double q : p.q) Q += q;
+    for (double &q : p.q) q += shift - Q / p.size();
+    const std::size_t n = p.size();
+    auto ev = kifmm::make_evaluator(kifmm::KernelSpec{}, slab_grid_options(10, n, h, c, shape));
+    std::vector<double> g(3 * n), pot(n), v(6 * n);
+    ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());
+    kifmm::periodic_point_virial(*ev, nullptr, n, p.xyz.data(), p.q.data(), g.data(), -1.0, v.data());
+    const std::vector<double> W = total(v);
+    double U = 0;
+    for (std::size_t i = 0; i < n; ++i) U += 0.5 * p.q[i] * pot[i];
+    EXPECT_NEAR(W[0] + W[1] + W[2], U, 1e-7 * std::fabs(U)) << "shift " << shift;
+    auto energy = [&](int axis, double eps) {
+      Points s = p;
+      double sh[3] = {shape[0], shape[1], shape[2]};
+      for (std::size_t i = 0; i < n; ++i) s.xyz[3 * i + axis] *= 1 + eps;
+      sh[axis] *= 1 + eps;
+      const double hs = std::max(sh[0], sh[1]);
+      for (double &x : sh) x /= hs;
+      std::vector<double> ps(n);
+      kifmm::slab_direct_sum(c, h * hs, sh, n, s.xyz.data(), s.q.data(), n, s.xyz.data(), ps.data(), nullptr);
+      double u = 0;
+      for (std::size_t i = 0; i < n; ++i) u += 0.5 * s.q[i] * ps[i];
+      return u;
+    };
+    const double eps = 1e-4;
+    double dU[3];
+    for (int a = 0; a < 3; ++a) {
+      dU[a] = (energy(a, eps) - energy(a, -eps)) / (2 * eps);
+      EXPECT_NEAR(W[a], -dU[a], 1e-6 * std::fabs(U)) << "axis " << a << " shift " << shift;
+    }
+    std::printf("  slab virial (net charge %.2f): W %.8g %.8g %.8g, -dU/de %.8g %.8g %.8g, U %.8g\n", shift * n, W[0], W[1],
+                W[2], -dU[0], -dU[1], -dU[2], U);
+    EXPECT_GT(std::fabs(W[0] - W[1]) + std::fabs(W[1] - W[2]), 1e-3 * std::fabs(U));
+  }
 }
 
 TEST(PeriodicVirial, NeedsTheGridAndLaplace)

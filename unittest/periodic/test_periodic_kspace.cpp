@@ -814,11 +814,63 @@ TEST_F(Periodic, PressureScalarYesKeepsTheTrace)
   EXPECT_LAMMPS_ERROR(command("run 0"), "pressure/scalar no' for tensor components");
 }
 
-TEST_F(Periodic, PressureTensorOfSlabsIsAnError)
+// The virial tensor of a slab (p p f): the diagonal is minus the strain derivative of the slab
+// energy, taken from ewald with slab factor 10 (its dipole correction makes it the doubly
+// periodic energy up to terms that decay as exp(-2 pi gap / L); kspace_modify slab adds no
+// virial of its own, so its W_xx is not the reference); xy equals ewald's there (the correction
+// has no xy part); per-atom virials sum to it; the trace is the energy.
+TEST_F(Periodic, SlabPressureTensorIsTheStrainDerivative)
 {
-  load(uniform_cube(50, 60), "p p f");
-  commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4\nkspace_modify pressure/scalar no");
-  EXPECT_LAMMPS_ERROR(command("run 0"), "is not available with a slab");
+  const Configuration conf = uniform_cube(300, 60);
+  auto setup = [&]() {
+    create();
+    load(conf, "p p f");
+    command("change_box all y final 0 0.8 z final 0 0.6 remap units box");
+  };
+  setup();
+  const Result ref = ewald_reference(10.0);
+  commands("kspace_style none\npair_style zero 0.01\npair_coeff * *\nkspace_style kifmm 1e-12\n"
+           "compute s all stress/atom NULL\ncompute ss all reduce sum c_s[1] c_s[2] c_s[3] c_s[4] c_s[5] c_s[6]\n"
+           "thermo_style custom step elong pxx pyy pzz pxy pxz pyz c_ss[1] c_ss[2] c_ss[3] c_ss[4] c_ss[5] c_ss[6]\n"
+           "thermo_modify norm no");
+  command("run 0 post no");
+  double w[6], scale = 0, err_atom = 0;
+  for (int k = 0; k < 6; ++k) w[k] = lmp->force->kspace->virial[k];
+  for (int k = 0; k < 3; ++k) scale += std::fabs(w[k]);
+  for (int k = 0; k < 6; ++k) {
+    const double sa = -evaluate(fmt_cmd("c_ss[{}]", (double) (k + 1)));
+    err_atom = std::max(err_atom, std::fabs(sa - w[k]) / scale);
+  }
+  const double V = lmp->domain->xprd * lmp->domain->yprd * lmp->domain->zprd;
+  EXPECT_NEAR(thermo("pxy"), w[3] / V, 1e-9 * scale / V);
+  EXPECT_NEAR(w[0] + w[1] + w[2], thermo("elong"), 1e-9 * scale) << "trace = energy";
+  EXPECT_LE(err_atom, 1e-10);
+  EXPECT_NEAR(w[3], ref.w[3], 1e-7 * scale) << "xy against ewald slab 10";
+  EXPECT_GT(std::fabs(w[3]), 1e-3 * scale) << "the xy part is not negligible";
+  const double eps = 1e-4;
+  const char *axis = "xyz";
+  double dU[3];
+  for (int a = 0; a < 3; ++a) {
+    double e[2];
+    for (int sg : {1, -1}) {
+      setup();
+      command(std::string("change_box all ") + axis[a] + fmt_cmd(" scale {} remap", 1 + sg * eps));
+      e[sg > 0 ? 0 : 1] = ewald_reference(10.0).energy;
+    }
+    dU[a] = (e[0] - e[1]) / (2 * eps);
+    EXPECT_NEAR(w[a], -dU[a], 1e-7 * scale) << "axis " << axis[a];
+  }
+  if (rank() == 0)
+    std::printf("  slab virial: W %.10g %.10g %.10g xy %.6g; -dU/de %.10g %.10g %.10g; ewald xy %.6g; per-atom %.1e\n", w[0],
+                w[1], w[2], w[3], -dU[0], -dU[1], -dU[2], ref.w[3], err_atom);
+}
+
+TEST_F(Periodic, PressureScalarNoWithPeriodicYukawaIsAnError)
+{
+  load(uniform_cube(50, 61));
+  commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4\nkspace_modify kifmm kernel yukawa 2.0\n"
+           "kspace_modify pressure/scalar no");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "pressure/scalar no' is not available with kernel yukawa");
 }
 
 TEST_F(Periodic, OpenBoundariesKeepTheTensor)

@@ -215,7 +215,13 @@ std::vector<double> grid_kernel_values(const KernelSpec &unit, const int k[3], i
 // sum of slab_ewald.h for the unit cell of half-widths k_d cs_d / K in x and y (K the larger),
 // excluding the images adjacent to the target cell (|D_x + k_x n_x|, |D_y + k_y n_y|, |D_z| <= 1).
 // No quadratic part (G_2 is harmonic). v[(x * nc1 + y) * nc2 + z], nc2 = (2 k_z - 1)(2p - 1).
-std::vector<double> slab_kernel_values(const int k[3], int p, const double cs[3])
+// With moment: the offset-weighted kernels of the virial as in grid_kernel_values, from
+// P_a(r) = sum_n (r + n L)_a G(r + n L) over the x-y lattice: real space (r_n)_a erfc(alpha r_n) /
+// r_n; reciprocal, for a in x, y, the transform of rho_a f(rho, z) (f the smooth part), i d/dk_a
+// of the weight: -sum_k (k_a / k) dw/dk(k, z) sin(k.rho) (its k = 0 term vanishes by the
+// lattice's reflection symmetry); for a = z, P_z = r_z G_2 (no images in z). The kernels are
+// harmonic (no background part).
+std::vector<double> slab_kernel_values(const int k[3], int p, const double cs[3], std::vector<double> *moment = nullptr)
 {
   const double K = std::max(k[0] * cs[0], k[1] * cs[1]);
   double box[2];
@@ -225,16 +231,18 @@ std::vector<double> slab_kernel_values(const int k[3], int p, const double cs[3]
   const int nc[3] = {k[0] * m, k[1] * m, (2 * k[2] - 1) * m};
   const double dx = p > 1 ? 2.0 * kRadiusInner / (p - 1) : 0.0;
   std::vector<int> rep[3];
-  std::vector<double> u[3];
+  std::vector<double> u[3], zeta[3];
   for (int d = 0; d < 3; ++d) {
     rep[d].resize(nc[d]);
     u[d].resize(nc[d]);
+    zeta[d].resize(nc[d]);
     const int nclass = d < 2 ? k[d] : 2 * k[2] - 1;
     for (int a = 0; a < nclass; ++a)
       for (int i = 0; i < m; ++i) {
         const int D = d < 2 ? grid_class_representative(a, k[d]) : a - (k[2] - 1);
         rep[d][a * m + i] = D;
         u[d][a * m + i] = (2.0 * D + (i - (p - 1)) * dx) * cs[d] / K;
+        zeta[d][a * m + i] = (i - (p - 1)) * dx * cs[d] / K;
       }
   }
   // reciprocal sum over the whole plane of m: Re sum w(|k|, z) e^{i k.rho}
@@ -248,40 +256,53 @@ std::vector<double> slab_kernel_values(const int k[3], int p, const double cs[3]
       for (int q = 0; q < M[d]; ++q)
         E[d][(std::size_t) c * M[d] + q] = std::polar(1.0, kPi * (q - Km[d]) * u[d][c] / box[d]);
   }
-  // A[a][y][z] = sum_b w(k_ab, z) E1[y][b]
-  std::vector<std::complex<double>> A((std::size_t) M[0] * nc[1] * nc[2]);
+  // A[set][a][y][z] = sum_b w_set(k_ab, z) E1[y][b]; sets: w, and with moment (k_x/k) dw/dk,
+  // (k_y/k) dw/dk
+  const int nsets = moment ? 3 : 1;
+  std::vector<std::vector<std::complex<double>>> A(nsets, std::vector<std::complex<double>>((std::size_t) M[0] * nc[1] * nc[2]));
 #pragma omp parallel for schedule(dynamic, 1)
   for (int a = 0; a < M[0]; ++a) {
-    std::vector<double> w((std::size_t) M[1] * nc[2]);
+    std::vector<double> w((std::size_t) nsets * M[1] * nc[2], 0.0);
     for (int b = 0; b < M[1]; ++b) {
       const double kk = s.k_of(a - Km[0], b - Km[1]);
+      if (kk <= 0) continue;
+      const double kv[2] = {kPi * (a - Km[0]) / box[0], kPi * (b - Km[1]) / box[1]};
       for (int z = 0; z < nc[2]; ++z) {
-        double wv = 0, dw;
-        if (kk > 0) s.weight(kk, u[2][z], wv, dw);
+        double wv, dw;
+        s.weight(kk, u[2][z], wv, dw);
         w[(std::size_t) b * nc[2] + z] = wv;
+        if (!moment) continue;
+        const double dk = s.weight_dk(kk, u[2][z]);
+        for (int d = 0; d < 2; ++d) w[((std::size_t) (1 + d) * M[1] + b) * nc[2] + z] = kv[d] / kk * dk;
       }
     }
-    for (int y = 0; y < nc[1]; ++y)
-      for (int z = 0; z < nc[2]; ++z) {
-        std::complex<double> acc = 0;
-        for (int b = 0; b < M[1]; ++b) acc += w[(std::size_t) b * nc[2] + z] * E[1][(std::size_t) y * M[1] + b];
-        A[((std::size_t) a * nc[1] + y) * nc[2] + z] = acc;
-      }
+    for (int set = 0; set < nsets; ++set)
+      for (int y = 0; y < nc[1]; ++y)
+        for (int z = 0; z < nc[2]; ++z) {
+          std::complex<double> acc = 0;
+          for (int b = 0; b < M[1]; ++b)
+            acc += w[((std::size_t) set * M[1] + b) * nc[2] + z] * E[1][(std::size_t) y * M[1] + b];
+          A[set][((std::size_t) a * nc[1] + y) * nc[2] + z] = acc;
+        }
   }
-  std::vector<double> v((std::size_t) nc[0] * nc[1] * nc[2]);
+  const std::size_t nv = (std::size_t) nc[0] * nc[1] * nc[2];
+  std::vector<double> v(nv);
+  if (moment) moment->assign(3 * nv, 0.0);
   const double cut = s.real_cut();
 #pragma omp parallel for schedule(dynamic, 1)
   for (int x = 0; x < nc[0]; ++x)
     for (int y = 0; y < nc[1]; ++y)
       for (int z = 0; z < nc[2]; ++z) {
-        std::complex<double> acc = 0;
-        for (int a = 0; a < M[0]; ++a)
-          acc += E[0][(std::size_t) x * M[0] + a] * A[((std::size_t) a * nc[1] + y) * nc[2] + z];
+        std::complex<double> acc[3] = {0, 0, 0};
+        for (int set = 0; set < nsets; ++set)
+          for (int a = 0; a < M[0]; ++a)
+            acc[set] += E[0][(std::size_t) x * M[0] + a] * A[set][((std::size_t) a * nc[1] + y) * nc[2] + z];
         const double r[3] = {u[0][x], u[1][y], u[2][z]};
         const int D[3] = {rep[0][x], rep[1][y], rep[2][z]};
         double z0, dz0;
         s.zero_term(r[2], z0, dz0);
-        double val = acc.real() + z0;
+        double val = acc[0].real() + z0;
+        double pm[2] = {-acc[1].imag(), -acc[2].imag()};    // P_x, P_y
         std::vector<int> cand[2];
         for (int c = 0; c < 2; ++c) {
           const int Q = s.images(c, std::fabs(r[c]));
@@ -301,8 +322,17 @@ std::vector<double> slab_kernel_values(const int k[3], int p, const double cs[3]
             double t, F;
             s.real(rho, excluded, t, F);
             val += t;
+            pm[0] += d0 * t;
+            pm[1] += d1 * t;
           }
-        v[((std::size_t) x * nc[1] + y) * nc[2] + z] = val / K;
+        const std::size_t at = ((std::size_t) x * nc[1] + y) * nc[2] + z;
+        if (moment) {
+          const double zt[3] = {zeta[0][x], zeta[1][y], zeta[2][z]};
+          (*moment)[at] = pm[0] - zt[0] * val;
+          (*moment)[nv + at] = pm[1] - zt[1] * val;
+          (*moment)[2 * nv + at] = (r[2] - zt[2]) * val;
+        }
+        v[at] = val / K;
       }
   return v;
 }
@@ -420,27 +450,29 @@ std::shared_ptr<const GridKernel> periodic_grid_kernel(const KernelSpec &unit, c
   return g;
 }
 
-std::shared_ptr<const GridMomentKernels> periodic_grid_moment_kernels(const int cells[3], int p, const double *cell_shape)
+std::shared_ptr<const GridMomentKernels> periodic_grid_moment_kernels(const int cells[3], int p, const double *cell_shape,
+                                                                      bool slab)
 {
   (void) fftw_mutex();
   static std::mutex mtx;
-  using Key = std::tuple<int, int, int, int, double, double, double>;
+  using Key = std::tuple<int, int, int, int, double, double, double, bool>;
   static std::map<Key, std::shared_ptr<const GridMomentKernels>> cache;
   const double one[3] = {1.0, 1.0, 1.0};
   const double *cs = cell_shape ? cell_shape : one;
-  const Key key{cells[0], cells[1], cells[2], p, cs[0], cs[1], cs[2]};
+  const Key key{cells[0], cells[1], cells[2], p, cs[0], cs[1], cs[2], slab};
   std::lock_guard<std::mutex> lock(mtx);
   auto it = cache.find(key);
   if (it != cache.end()) return it->second;
   if (cache.size() > 8) cache.clear();
-  if (std::min(cells[0], std::min(cells[1], cells[2])) < 3)
+  if (std::min(cells[0], cells[1]) < 3 || cells[2] < (slab ? 1 : 3))
     throw std::invalid_argument("kifmm: a periodic grid needs at least 3 cells per periodic side");
   std::vector<double> mom;
-  grid_kernel_values(KernelSpec{}, cells, p, cs, &mom);
+  if (slab) slab_kernel_values(cells, p, cs, &mom);
+  else grid_kernel_values(KernelSpec{}, cells, p, cs, &mom);
   auto g = std::make_shared<GridMomentKernels>();
   const std::size_t nv = mom.size() / 3;
   for (int a = 0; a < 3; ++a)
-    g->a[a] = grid_kernel_from_values(cells, p, cs, false, 0.0,
+    g->a[a] = grid_kernel_from_values(cells, p, cs, slab, 0.0,
                                       std::vector<double>(mom.begin() + a * nv, mom.begin() + (a + 1) * nv));
   cache[key] = g;
   return g;

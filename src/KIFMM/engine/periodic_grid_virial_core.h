@@ -12,7 +12,8 @@
 //              upward densities as the ordinary grid M2L (degree 0: no scale), then the
 //              check-to-equivalent and L2P gradient of the grid;
 //   background: the kernels leave out -(2 pi / 5 V) zeta_a |zeta|^2, zeta = u - w; it is added
-//              here from the moments sum q, sum q w, sum q w w^T of all sources.
+//              here from the moments sum q, sum q w, sum q w w^T of all sources (p p p; a slab's
+//              kernels are harmonic: images over the x-y lattice only, D_n,z = c_t,z - c_s,z).
 #pragma once
 
 #include "fmm_core.h"
@@ -28,17 +29,17 @@ namespace kifmm {
 
 template <class K> void FmmEvaluator<K>::check_virial_grid() const
 {
-  if (!std::is_same_v<K, LaplaceKernel> || !grid_ || opt_.periodic_dims != 3)
+  if (!std::is_same_v<K, LaplaceKernel> || !grid_ || opt_.periodic_dims < 2)
     throw std::invalid_argument(
         "kifmm: the periodic virial is computed for the Laplace kernel on the single-level grid "
-        "(Options::periodic_grid > 0) with three periodic dimensions");
+        "(Options::periodic_grid > 0) with three periodic dimensions or a slab");
 }
 
 // offsets from the cells' centres (wrapped coordinates)
 template <class K> void FmmEvaluator<K>::grid_offsets(std::size_t n, const double *xyz, double *offset) const
 {
   std::vector<double> wrapped;
-  wrap_into_cell(n, xyz, opt_.root_center, opt_.root_half_width, wrapped, opt_.root_shape);
+  wrap_into_cell(n, xyz, opt_.root_center, opt_.root_half_width, wrapped, opt_.root_shape, opt_.periodic_dims);
   const GridGeometry g = grid_geometry();
   for (std::size_t i = 0; i < n; ++i) {
     double c[3];
@@ -96,7 +97,7 @@ template <class K> void FmmEvaluator<K>::grid_offset_field(Communicator *comm, d
     const std::size_t nt = tx_.size();
     const int kc = g.kc;
     // ---- far part: three convolutions of the upward densities (kept from the evaluation)
-    const auto mk = periodic_grid_moment_kernels(g.k, p_, g.cs);
+    const auto mk = periodic_grid_moment_kernels(g.k, p_, g.cs, g.slab);
     std::vector<double> occupied(kc);
     for (int b = 0; b < kc; ++b) occupied[b] = own_end[b] - sb[b];
     grid_reduce(comm, occupied.data(), kc);
@@ -155,7 +156,9 @@ template <class K> void FmmEvaluator<K>::grid_offset_field(Communicator *comm, d
       }
     }
     // ---- background: d_b of sum_j q_j N_a(u - w_j), N_a(z) = -(2 pi / 5 V) z_a |z|^2
-    // dipoles: minus mu . grad_z of the charge terms, from P = sum mu and R_ab = sum mu_a w_b
+    // dipoles: minus mu . grad_z of the charge terms, from P = sum mu and R_ab = sum mu_a w_b.
+    // A slab has none (its kernels are harmonic).
+    if (g.slab) return;
     double mom[25] = {0};    // Q, M1[3], M2[9], P[3], R[9]
     for (int b = 0; b < kc; ++b) {
       double c[3];

@@ -77,6 +77,14 @@ struct SlabSplit {
     w = c * (ez_erfc(k, z) + ez_erfc(k, -z));
     dw = c * (ez_erfc_dz(k, z) - ez_erfc_dz(k, -z));
   }
+  // d/dk of the reciprocal weight at height z (the first-moment tables of the virial):
+  // d/dk e^{kz} erfc(k/2alpha + alpha z) = z e^{kz} erfc(..) - e^{-k^2/4alpha^2 - alpha^2 z^2} / (alpha sqrt(pi))
+  double weight_dk(double k, double z) const
+  {
+    const double c = kPi / (area * k), fp = ez_erfc(k, z), fm = ez_erfc(k, -z);
+    const double g = std::exp(-(k / (2 * alpha)) * (k / (2 * alpha)) - alpha * alpha * z * z) / (alpha * kSqrtPi);
+    return -c * (fp + fm) / k + c * (z * (fp - fm) - 2 * g);
+  }
   // the k = 0 term and its d/dz
   void zero_term(double z, double &v, double &dv) const
   {

@@ -126,7 +126,8 @@ class Evaluator {
   virtual void set_root_box(const double center[3], const double half_widths[3]) = 0;
 
   // What the periodic virial needs besides the gradients (periodic_point_virial): Laplace,
-  // p p p, single-level grid (Options::periodic_grid > 0) only. Sources = targets = xyz
+  // p p p or a slab (periodic_dims 2: the images over the x-y lattice only), single-level grid
+  // (Options::periodic_grid > 0) only. Sources = targets = xyz
   // (strengths q; collective over comm when not null, each rank its own points). Per point i:
   //   offset[3i + a]    = (x_i - c_i)_a, c_i the centre of the grid cell of x_i (wrapped);
   //   psi[9i + 3a + b]  = d/dx_b sum_{j, n} q_j (D_n)_a G(x_i - x_j - n L),
@@ -391,7 +392,7 @@ void point_virial(Evaluator &ev, Communicator *comm, std::size_t n, const double
                   const double *q, const double *grad, double prefactor, double *virial,
                   double center[3]);
 
-// Per-point virial of the periodic sum (Laplace, p p p, the single-level grid), in the form and
+// Per-point virial of the periodic sum (Laplace, p p p or a slab, the single-level grid), in the form and
 // order of point_virial: virial[6i + ab] = 1/2 sum_{j, n} (x_i - x_j - n L)_a F_ijn,b over all
 // images n (the pair i, i at n = 0 excluded). With u_i = x_i - c_i (c_i the centre of i's grid
 // cell) the separation is u_i - u_j + D_n, so
@@ -415,7 +416,7 @@ void dipole_point_virial(Evaluator &ev, std::size_t n_src, const double *src_xyz
                          const double *src_mu, std::size_t n_trg, const double *trg_xyz, const double *trg_q,
                          const double *trg_mu, const double *grad, const double *hess, double prefactor,
                          double *virial, const double center[3]);
-// The same periodic (p p p, Laplace, on the grid; dipole_virial.cpp):
+// The same periodic (p p p or a slab, Laplace, on the grid; dipole_virial.cpp):
 // virial[6k + m] = prefactor / 2 sum_{j, n} (r_n)_a F_b (ab = xx yy zz xy xz yz; r_n = x_k - y_j - n L,
 // F = (q_k d + mu_k . grad d) d_b of the potential of image n of j), from the evaluation's grad and
 // hess at the targets, periodic_dipole_virial_fields and three dipole evaluations of the

@@ -503,6 +503,7 @@ void KSpaceKIFMM::compute(int eflag, int vflag)
   gather_points();
   const std::size_t n = index.size();
 
+  update_slab_extent();
   if (periodic) periodic_cell();    // the box is the cell (it may have changed)
   if (tree_choice_pending) choose_tree_from_atoms();
   // induced dipoles first (kspace_kifmm_polarize.cpp); an energy-only evaluation of fix

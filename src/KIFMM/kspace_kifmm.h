@@ -142,12 +142,17 @@ class KSpaceKIFMM : public KSpace {
   void periodic_init();
   void periodic_cell();
   void periodic_box(double center[3], double half_widths[3]) const;
+  // a slab's z extent: the box's, or wider while atoms are outside the box in z (between
+  // reneighborings, or during a run with shrink-wrapped z)
+  bool slab_extent_set = false;
+  double slab_extent[2] = {0.0, 0.0};
+  void update_slab_extent();
   void periodic_root(kifmm::Options &o) const;
   bool periodic_fits(const kifmm::Options &o) const;
   void fit_periodic_box(kifmm::Options &o);
   std::string grid_cells_text(const kifmm::Options &o) const;
   void periodic_virial(double e_local);
-  // the full virial tensor of p p p (coulomb, gravity) on the single-level grid: the engine's
+  // the full virial tensor of p p p and slabs (coulomb, gravity) on the single-level grid: the engine's
   // own, or a grid evaluator next to the octree (virial_engine)
   bool periodic_tensor() const;
   std::unique_ptr<kifmm::Evaluator> virial_engine;

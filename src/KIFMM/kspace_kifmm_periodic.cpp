@@ -107,13 +107,46 @@ void KSpaceKIFMM::periodic_init()
                    qsum);
 }
 
-// The box as the periodic cell: center and half-widths.
+// The box as the periodic cell: center and half-widths (a slab: z from its extent).
 void KSpaceKIFMM::periodic_box(double center[3], double half_widths[3]) const
 {
   for (int d = 0; d < 3; ++d) {
     center[d] = 0.5 * (domain->boxlo[d] + domain->boxhi[d]);
     half_widths[d] = 0.5 * domain->prd[d];
   }
+  if (slab && slab_extent_set) {
+    center[2] = 0.5 * (slab_extent[0] + slab_extent[1]);
+    half_widths[2] = 0.5 * (slab_extent[1] - slab_extent[0]);
+  }
+}
+
+// The z extent of a slab's grid covers every atom: the doubly periodic sum does not depend on
+// it, but the grid's cells must hold the atoms. Atoms outside the box in z (between
+// reneighborings, before LAMMPS loses them with boundary f or moves the shrink-wrapped box)
+// widen it beyond the atoms by 5 % of the box height; it is kept while it covers the atoms and
+// is at most twice that wider than they need, so that the grid (whose kernels depend on the
+// cells' shape) is not made again at every step.
+void KSpaceKIFMM::update_slab_extent()
+{
+  if (!slab) return;
+  double lo_hi[2] = {domain->boxlo[2], -domain->boxhi[2]};
+  for (std::size_t k = 0; k < index.size(); ++k) {
+    lo_hi[0] = std::min(lo_hi[0], xyz[3 * k + 2]);
+    lo_hi[1] = std::min(lo_hi[1], -xyz[3 * k + 2]);
+  }
+  double all[2];
+  MPI_Allreduce(lo_hi, all, 2, MPI_DOUBLE, MPI_MIN, world);
+  if (!std::isfinite(all[0]) || !std::isfinite(all[1]))
+    error->all(FLERR, "kspace_style kifmm: an atom has a non-finite z coordinate (step {})", update->ntimestep);
+  const double need[2] = {all[0], -all[1]}, pad = 0.05 * domain->prd[2];
+  if (slab_extent_set && slab_extent[0] <= need[0] && slab_extent[1] >= need[1] && slab_extent[0] >= need[0] - 2 * pad &&
+      slab_extent[1] <= need[1] + 2 * pad)
+    return;
+  const bool inside = need[0] >= domain->boxlo[2] && need[1] <= domain->boxhi[2];
+  slab_extent_set = !inside;
+  if (inside) return;
+  slab_extent[0] = need[0] < domain->boxlo[2] ? need[0] - pad : need[0];
+  slab_extent[1] = need[1] > domain->boxhi[2] ? need[1] + pad : need[1];
 }
 
 // The periodic cell as the engine's fixed root (largest half-width and the shape).

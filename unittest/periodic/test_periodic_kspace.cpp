@@ -630,6 +630,30 @@ TEST_F(Periodic, SlabNetChargeWarns)
   if (rank() == 0) EXPECT_NE(out.find("without a neutralizing background"), std::string::npos) << out;
 }
 
+// atoms that leave the box in z between reneighborings (before LAMMPS loses them with
+// boundary f): the slab's grid covers them, and the result is that of the same atoms in a box
+// tall enough to hold them (the doubly periodic sum does not depend on the box height)
+TEST_F(Periodic, SlabAtomsOutsideTheBoxInZAreCovered)
+{
+  auto run = [&](bool tall) {
+    create();
+    load(uniform_cube(300, 63), "p p f");
+    if (tall) command("change_box all z final -0.5 1.5 units box");
+    commands("set atom 1 z 0.999\nset atom 2 z 0.002\nmass * 1.0\nvelocity all set 0 0 0\n"
+             "group up id 1\ngroup down id 2\nvelocity up set 0 0 2.0\nvelocity down set 0 0 -2.0\n"    // out after 1, 3 steps
+             "neigh_modify every 100 delay 0 check no\ntimestep 0.005\nfix 1 all nve\n"
+             "pair_style zero 0.01\npair_coeff * *\nkspace_style kifmm 1e-6\nrun 4 post no");
+    return Result{forces_by_id(), thermo("elong")};
+  };
+  const Result ref = run(true), r = run(false);
+  const double ef = relative_force_error(r.f, ref.f), ee = rel(r.energy, ref.energy);
+  if (rank() == 0) std::printf("  atoms outside the slab's box in z: forces %.2e, energy %.2e\n", ef, ee);
+  EXPECT_GT(positions_by_id().at(1)[2], 1.0) << "atom 1 is above the box";
+  EXPECT_LT(positions_by_id().at(2)[2], 0.0) << "atom 2 is below the box";
+  EXPECT_LE(ef, 1e-5);
+  EXPECT_LE(ee, 1e-5);
+}
+
 // (death tests: not in the MPI runs of this binary, whose filter names the tests it runs)
 TEST_F(Periodic, SlabUnsupportedSettingsAreErrors)
 {
@@ -799,6 +823,17 @@ TEST_F(Periodic, FixNptAnisoRuns)
   commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4\nvelocity all create 1.0 5\n"
            "fix 1 all npt temp 1 1 0.1 aniso 1 1 1\nthermo_style custom step press pxx pyy pzz lx ly lz\nrun 5 post no");
   EXPECT_NE(lmp->domain->xprd, lmp->domain->yprd) << "the box deforms anisotropically";
+}
+
+// a slab under a barostat on its periodic axes (x and y uncoupled: pxx and pyy)
+TEST_F(Periodic, FixNptOnTheAxesOfASlabRuns)
+{
+  load(uniform_cube(60, 62), "p p f");
+  commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4\nvelocity all create 1.0 5\n"
+           "fix 1 all npt temp 1 1 0.1 x 1 1 1 y 1 1 1 couple none\n"
+           "thermo_style custom step press pxx pyy pzz pxy lx ly lz\nrun 5 post no");
+  EXPECT_NE(lmp->domain->xprd, lmp->domain->yprd) << "x and y change apart";
+  EXPECT_NE(thermo("pxx"), thermo("pyy"));
 }
 
 TEST_F(Periodic, PressureScalarYesKeepsTheTrace)

@@ -27,6 +27,7 @@
 #include <filesystem>
 #include <mpi.h>
 #include <random>
+#include <stdexcept>
 
 using namespace LAMMPS_NS;
 using kifmm_lammps::LongRangeKernel;
@@ -148,7 +149,40 @@ double KSpaceKIFMM::energy_prefactor() const
   return kset.kernel == LongRangeKernel::Gravity ? -kset.gravity_G : qqrd2e;
 }
 
+// Engine exceptions (std::logic_error for input it refuses, std::runtime_error, std::bad_alloc)
+// as LAMMPS errors on the rank that met them (the others may be waiting in a collective: as
+// error->one, the run ends). LAMMPS's own exceptions (error->all with LAMMPS_EXCEPTIONS) are
+// none of these and pass through.
+template <class F> void KSpaceKIFMM::guarded(const char *what, F &&body)
+{
+  try {
+    body();
+  } catch (std::bad_alloc &) {
+    error->one(FLERR, "kspace_style kifmm: out of memory in {} (step {}); fewer atoms per rank or a lower "
+               "accuracy need less", what, update->ntimestep);
+  } catch (std::logic_error &e) {
+    error->one(FLERR, "kspace_style kifmm: {} stopped (step {}): {}", what, update->ntimestep, e.what());
+  } catch (std::runtime_error &e) {
+    error->one(FLERR, "kspace_style kifmm: {} stopped (step {}): {}", what, update->ntimestep, e.what());
+  }
+}
+
 void KSpaceKIFMM::init()
+{
+  guarded("init", [this] { init_style_and_engine(); });
+}
+
+void KSpaceKIFMM::setup()
+{
+  guarded("the setup of the run", [this] { setup_run(); });
+}
+
+void KSpaceKIFMM::compute(int eflag, int vflag)
+{
+  guarded("the long-range evaluation", [&] { compute_step(eflag, vflag); });
+}
+
+void KSpaceKIFMM::init_style_and_engine()
 {
   if (domain->dimension == 2)
     error->all(FLERR,
@@ -314,7 +348,7 @@ void KSpaceKIFMM::init()
   }
 }
 
-void KSpaceKIFMM::setup()
+void KSpaceKIFMM::setup_run()
 {
   warned_coincident = false;
   run_timing.reset();
@@ -463,7 +497,7 @@ bool KSpaceKIFMM::distributed() const
   return comm->nprocs > 1;
 }
 
-void KSpaceKIFMM::compute(int eflag, int vflag)
+void KSpaceKIFMM::compute_step(int eflag, int vflag)
 {
   ev_init(eflag, vflag);
   energy = 0.0;

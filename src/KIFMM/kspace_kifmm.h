@@ -31,6 +31,13 @@ class KSpaceKIFMM : public KSpace {
   int modify_param(int, char **) override;
   double memory_usage() override;
 
+  // init, setup and compute run these inside guarded(): an exception of the engine (bad
+  // input it checks, or memory) becomes a LAMMPS error naming it instead of ending the process
+  void init_style_and_engine();
+  void setup_run();
+  void compute_step(int, int);
+  template <class F> void guarded(const char *what, F &&body);
+
   // last measured relative RMS force error of `check` (negative when never measured)
   double measured_error() const { return last_measured_error; }
   const kifmm::Stats &engine_stats() const;

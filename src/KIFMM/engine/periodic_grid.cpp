@@ -54,6 +54,57 @@ void grid_convolve(const GridKernel &g, std::complex<double> *z, int f0, int f1)
 
 namespace {
 
+// Mirror symmetry of the kernel tables: the lattice sums are even in each coordinate (orthogonal
+// lattice, symmetric image and reciprocal sets), and class D with offset i mirrors to class -D
+// with offset 2(p - 1) - i, whose excluded images are the mirrored ones. So a table value equals
+// that of its mirror point along every axis, and the first-moment table of component a changes
+// sign along axis a. Computing one point of each mirror orbit and copying the others cuts the
+// work of a table by up to 8. Classes whose mirror is not their own representative (D = k/2 for
+// an even k: the mirror point is an image of the point, but the tables' quadratic term is not
+// periodic) are computed as they are.
+struct TableMirror {
+  std::vector<int> to[3];    // per axis and coordinate: the mirror coordinate, or -1 (none)
+  // rep[d][c]: the class offset D of coordinate c; m points per class; slab_z: axis 2 has the
+  // classes D = -(k_z - 1) .. k_z - 1 (no images)
+  TableMirror(const std::vector<int> rep[3], const int k[3], int m, bool slab_z)
+  {
+    for (int d = 0; d < 3; ++d) {
+      const int nc = (int) rep[d].size();
+      to[d].assign(nc, -1);
+      for (int c = 0; c < nc; ++c) {
+        const int a = c / m, i = c % m, D = rep[d][c];
+        int a2;
+        if (d == 2 && slab_z) a2 = (k[2] - 1) - D;    // the class of offset -D
+        else a2 = (k[d] - a) % k[d];
+        const int c2 = a2 * m + (m - 1 - i);
+        if (c2 >= 0 && c2 < nc && rep[d][c2] == -D) to[d][c] = c2;
+      }
+    }
+  }
+  // the point computed for coordinate c along axis d (its mirror when that comes first)
+  int source(int d, int c) const { return to[d][c] >= 0 && to[d][c] < c ? to[d][c] : c; }
+  bool computed(int x, int y, int z) const { return source(0, x) == x && source(1, y) == y && source(2, z) == z; }
+  // v[(x nc1 + y) nc2 + z] (and moment[a nv + ...] when not null, odd along axis a) of the points
+  // not computed, from those that are
+  void fill(std::vector<double> &v, std::vector<double> *moment) const
+  {
+    const int nc[3] = {(int) to[0].size(), (int) to[1].size(), (int) to[2].size()};
+    const std::size_t nv = v.size();
+#pragma omp parallel for schedule(static)
+    for (int x = 0; x < nc[0]; ++x)
+      for (int y = 0; y < nc[1]; ++y)
+        for (int z = 0; z < nc[2]; ++z) {
+          const int c[3] = {x, y, z}, sc[3] = {source(0, x), source(1, y), source(2, z)};
+          if (sc[0] == x && sc[1] == y && sc[2] == z) continue;
+          const std::size_t at = ((std::size_t) x * nc[1] + y) * nc[2] + z;
+          const std::size_t from = ((std::size_t) sc[0] * nc[1] + sc[1]) * nc[2] + sc[2];
+          v[at] = v[from];
+          if (moment)
+            for (int a = 0; a < 3; ++a) (*moment)[a * nv + at] = (sc[a] != c[a] ? -1.0 : 1.0) * (*moment)[a * nv + from];
+        }
+  }
+};
+
 // Values of K_D (periodic_grid.h) in unit-grid coordinates (cell half-widths cs_d, largest 1)
 // at every r_d = (2 D_d + i dx) cs_d, D the class representative in (-k_d/2, k_d/2], i in
 // [-(p-1), p-1]: a tensor grid of k_d (2p - 1) coordinates along axis d. With K the largest
@@ -143,10 +194,12 @@ std::vector<double> grid_kernel_values(const KernelSpec &unit, const int k[3], i
   if (moment) moment->assign(3 * nv, 0.0);
   const double quad_unit = s.yukawa ? 0.0 : 2 * kPi / (3 * s.volume);
   const double cut = s.real_cut();
+  const TableMirror mirror(rep, k, m, false);
 #pragma omp parallel for schedule(dynamic, 1)
   for (int x = 0; x < nc[0]; ++x)
     for (int y = 0; y < nc[1]; ++y)
       for (int z = 0; z < nc[2]; ++z) {
+        if (!mirror.computed(x, y, z)) continue;
         std::complex<double> acc[4] = {0, 0, 0, 0};
         for (int set = 0; set < nsets; ++set)
           for (int a = 0; a < M[0]; ++a)
@@ -207,6 +260,7 @@ std::vector<double> grid_kernel_values(const KernelSpec &unit, const int k[3], i
         val -= quad_unit * (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
         v[at] = val / K;
       }
+  mirror.fill(v, moment);
   return v;
 }
 
@@ -289,10 +343,12 @@ std::vector<double> slab_kernel_values(const int k[3], int p, const double cs[3]
   std::vector<double> v(nv);
   if (moment) moment->assign(3 * nv, 0.0);
   const double cut = s.real_cut();
+  const TableMirror mirror(rep, k, m, true);
 #pragma omp parallel for schedule(dynamic, 1)
   for (int x = 0; x < nc[0]; ++x)
     for (int y = 0; y < nc[1]; ++y)
       for (int z = 0; z < nc[2]; ++z) {
+        if (!mirror.computed(x, y, z)) continue;
         std::complex<double> acc[3] = {0, 0, 0};
         for (int set = 0; set < nsets; ++set)
           for (int a = 0; a < M[0]; ++a)
@@ -334,6 +390,7 @@ std::vector<double> slab_kernel_values(const int k[3], int p, const double cs[3]
         }
         v[at] = val / K;
       }
+  mirror.fill(v, moment);
   return v;
 }
 

@@ -600,11 +600,10 @@ void KSpaceKIFMM::compute_step(int eflag, int vflag)
     if (vflag_global || keep || vflag_atom) dipole_virial(cf, vflag_global || keep, vflag_atom);
   } else {
     const bool tensor = periodic_tensor();
-    if (periodic && !tensor && (vflag_global || keep)) periodic_virial(e_local);
+    if (periodic && !tensor && (vflag_global || keep)) periodic_virial(e_local, cf);
     if (vflag_atom && periodic && !tensor)
       error->all(FLERR, "kspace_style kifmm: per-atom virial (compute stress/atom) with periodic boundaries "
-                 "needs boundary p p p, kernel coulomb or gravity and 'kspace_modify pressure/scalar no' "
-                 "(the default there)");
+                 "needs 'kspace_modify pressure/scalar no' (the default)");
     if (tensor && (vflag_global || keep || vflag_atom)) periodic_tensor_virial(cf, vflag_global || keep, vflag_atom);
     if (vflag_atom && !periodic && nsrc > 0) {
       double center[3] = {0, 0, 0};

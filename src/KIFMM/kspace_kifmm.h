@@ -143,7 +143,6 @@ class KSpaceKIFMM : public KSpace {
   // periodic boundaries (kspace_kifmm_periodic.cpp)
   bool periodic = false;
   bool slab = false;    // boundary p p f (or p p s/m): periodic in x and y only
-  bool warned_periodic_virial = false;
   bool warned_octree_fallback = false;    // a box no grid fits at this order (fit_periodic_box)
   int scalar_pressure_written = -1, scalar_pressure_user = -1;    // pressure/scalar (periodic_init)
   void periodic_init();
@@ -158,8 +157,8 @@ class KSpaceKIFMM : public KSpace {
   bool periodic_fits(const kifmm::Options &o) const;
   void fit_periodic_box(kifmm::Options &o);
   std::string grid_cells_text(const kifmm::Options &o) const;
-  void periodic_virial(double e_local);
-  // the full virial tensor of p p p and slabs (coulomb, gravity) on the single-level grid: the engine's
+  void periodic_virial(double e_local, double prefactor);
+  // the full virial tensor of p p p and slabs on the single-level grid: the engine's
   // own, or a grid evaluator next to the octree (virial_engine)
   bool periodic_tensor() const;
   std::unique_ptr<kifmm::Evaluator> virial_engine;

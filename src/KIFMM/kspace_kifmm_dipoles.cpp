@@ -173,18 +173,6 @@ double KSpaceKIFMM::point_energy(std::size_t k, double ce) const
 // lj/cut/dipole/cut tallies it.
 void KSpaceKIFMM::dipole_virial(double cf, bool global, bool peratom)
 {
-  // periodic yukawa: no dipole virial (as for periodic yukawa charges)
-  if (periodic && kset.kernel == LongRangeKernel::Yukawa) {
-    if (peratom)
-      error->all(FLERR, "kspace_style kifmm: the per-atom virial (compute stress/atom) of point dipoles with "
-                 "periodic yukawa is not available in this version");
-    for (double &v : virial) v = 0.0;
-    if (!warned_periodic_virial && comm->me == 0)
-      error->warning(FLERR, "kspace_style kifmm: the virial of point dipoles with periodic yukawa is not "
-                     "computed (0); the pressure has no long-range part");
-    warned_periodic_virial = true;
-    return;
-  }
   global = global && periodic;    // open boundaries: sum_i x_i F_i, already in virial
   if (!global && !peratom) return;
   const std::size_t n = index.size();

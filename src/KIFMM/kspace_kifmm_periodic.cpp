@@ -78,17 +78,11 @@ void KSpaceKIFMM::periodic_init()
                "density is not zero); use 'kspace_modify kifmm jeans yes' to subtract it "
                "(uniform negative background, Jeans swindle)");
   periodic_cell();
-  // coulomb or gravity (p p p and slabs): the full virial tensor (periodic_tensor_virial), unless
-  // 'kspace_modify pressure/scalar yes' asks for the trace only (exact and free: the energy).
-  // Yukawa: not computed; LAMMPS's flag for scalar-only kspace pressures makes compute pressure
-  // refuse tensor components (thermo pxx, fix npt/nph aniso or tri, fix box/relax aniso, ...)
-  // instead of using wrong ones
-  const bool tensor_possible = kset.kernel != LongRangeKernel::Yukawa;
-  if (scalar_pressure_user == 0 && !tensor_possible)
-    error->all(FLERR,
-               "kspace_style kifmm: 'kspace_modify pressure/scalar no' is not available with kernel "
-               "yukawa and periodic boundaries: its periodic virial is not computed");
-  scalar_pressure_flag = scalar_pressure_written = (tensor_possible && scalar_pressure_user != 1) ? 0 : 1;
+  // the full virial tensor (periodic_tensor_virial) unless 'kspace_modify pressure/scalar yes'
+  // asks for the trace only; LAMMPS's flag for scalar-only kspace pressures then makes compute
+  // pressure refuse tensor components (thermo pxx, fix npt/nph aniso or tri, fix box/relax
+  // aniso, ...) instead of using wrong ones
+  scalar_pressure_flag = scalar_pressure_written = scalar_pressure_user == 1 ? 1 : 0;
   // net charge of a slab: no background, the doubly periodic sum of the charges as they are
   if (slab && std::fabs(qsum) > 1.0e-5 && comm->me == 0)
     error->warning(FLERR,
@@ -288,29 +282,26 @@ void KSpaceKIFMM::periodic_cell()
 // Coulomb and gravity are homogeneous of degree -1 in all lengths (positions and cell; the
 // tin-foil sum and the background term included, and the doubly periodic sum of a slab), so the
 // trace of the virial equals the energy: W_xx = W_yy = W_zz = U/3 gives the exact scalar
-// pressure. The anisotropic part is not computed: scalar_pressure_flag = 1 (periodic_init) makes
-// LAMMPS's compute pressure stop when tensor components are asked for. Yukawa: not computed (0,
-// warning).
-void KSpaceKIFMM::periodic_virial(double e_local)
+// pressure for free. Yukawa is not homogeneous: its trace comes from the tensor. The anisotropic
+// part is not reported: scalar_pressure_flag = 1 (periodic_init) makes LAMMPS's compute pressure
+// stop when tensor components are asked for.
+void KSpaceKIFMM::periodic_virial(double e_local, double cf)
 {
-  for (int k = 0; k < 6; ++k) virial[k] = 0.0;
-  if (kset.kernel == LongRangeKernel::Yukawa) {
-    if (!warned_periodic_virial && comm->me == 0)
-      error->warning(FLERR,
-                     "kspace_style kifmm: the virial of periodic yukawa is not computed (0); "
-                     "the pressure has no long-range part");
-    warned_periodic_virial = true;
-    return;
-  }
   double u = 0.0;
-  MPI_Allreduce(&e_local, &u, 1, MPI_DOUBLE, MPI_SUM, world);
+  if (kset.kernel == LongRangeKernel::Yukawa) {
+    periodic_tensor_virial(cf, true, false);
+    u = virial[0] + virial[1] + virial[2];
+  } else {
+    MPI_Allreduce(&e_local, &u, 1, MPI_DOUBLE, MPI_SUM, world);
+  }
+  for (int k = 0; k < 6; ++k) virial[k] = 0.0;
   virial[0] = virial[1] = virial[2] = u / 3.0;
 }
 
-// The full tensor is computed for p p p and slabs with coulomb or gravity unless pressure/scalar yes.
+// The full tensor is computed unless pressure/scalar yes.
 bool KSpaceKIFMM::periodic_tensor() const
 {
-  return periodic && kset.kernel != LongRangeKernel::Yukawa && scalar_pressure_flag == 0;
+  return periodic && scalar_pressure_flag == 0;
 }
 
 // The evaluator of the virial tensor: the engine when it is the single-level grid; next to the

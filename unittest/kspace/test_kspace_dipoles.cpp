@@ -298,6 +298,27 @@ TEST_F(PeriodicDipoles, SlabMeetsTheRequestAndIsPeriodicInXY)
   EXPECT_LE(relative_force_error(b.t, a.t), 3e-6);
 }
 
+// periodic yukawa: the pressure tensor under a small stretch along y, W_yy = -dU/d(strain) at
+// fixed kappa (as for coulomb above; yukawa is not homogeneous, so this is not the energy)
+TEST_F(PeriodicDipoles, ScreenedPressureIsTheStrainDerivative)
+{
+  periodic_spheres();
+  commands("pair_style zero 1.0\npair_coeff * *\nkspace_style kifmm 1e-10\n"
+           "kspace_modify kifmm kernel yukawa 1.0 order 12 grid 4\nrun 0 post no");
+  const double wyy = evaluate("c_p[2]") * evaluate("vol"), wxy = evaluate("c_p[4]") * evaluate("vol");
+  double u[2];
+  for (int sg : {1, -1}) {
+    command("change_box all y scale " + fmt_g(1 + sg * 1e-3) + " remap units box");
+    command("run 0 post no");
+    u[sg > 0 ? 0 : 1] = thermo("pe");
+    command("change_box all y scale " + fmt_g(1.0 / (1 + sg * 1e-3)) + " remap units box");
+  }
+  const double dU = (u[0] - u[1]) / 2e-3;
+  std::printf("  yukawa W_yy %.10g, -dU/de %.10g (W_xy %.4g)\n", wyy, -dU, wxy);
+  EXPECT_NEAR(wyy, -dU, 1e-5 * std::fabs(wyy));
+  EXPECT_NE(wxy, 0.0);
+}
+
 // the pressure tensor of a slab under small stretches along x and z: W_aa = -dU/d(strain) (as in
 // the periodic cube above); the per-atom virials (compute stress/atom) sum to the global one
 TEST_F(PeriodicDipoles, SlabPressureIsTheStrainDerivative)
@@ -337,7 +358,7 @@ TEST_F(PeriodicDipoles, SlabPressureIsTheStrainDerivative)
 // periodic yukawa: the order chosen for 1e-6 meets it (check: against the engine at order 14)
 TEST_F(PeriodicDipoles, ScreenedKernelMeetsTheRequest)
 {
-  periodic_spheres();    // (periodic yukawa has the scalar pressure only: no tensor components)
+  periodic_spheres();
   commands("thermo_style custom step pe press\nthermo_modify norm no\npair_style zero 1.0\npair_coeff * *\n"
            "kspace_style kifmm 1e-6\nkspace_modify kifmm kernel yukawa 1.0 check 1 300\nrun 0 post no");
   const double measured = evaluate("v_kifmm_error");

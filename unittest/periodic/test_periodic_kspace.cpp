@@ -17,6 +17,7 @@
 #include "force.h"
 #include "kspace.h"
 #include "lammps.h"
+#include "pair.h"
 
 #include <cmath>
 #include <cstdio>
@@ -900,14 +901,6 @@ TEST_F(Periodic, SlabPressureTensorIsTheStrainDerivative)
                 w[1], w[2], w[3], -dU[0], -dU[1], -dU[2], ref.w[3], err_atom);
 }
 
-TEST_F(Periodic, PressureScalarNoWithPeriodicYukawaIsAnError)
-{
-  load(uniform_cube(50, 61));
-  commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4\nkspace_modify kifmm kernel yukawa 2.0\n"
-           "kspace_modify pressure/scalar no");
-  EXPECT_LAMMPS_ERROR(command("run 0"), "pressure/scalar no' is not available with kernel yukawa");
-}
-
 TEST_F(Periodic, OpenBoundariesKeepTheTensor)
 {
   // the flag is only set for periodic boxes: open boundaries report pxx (exact tensor)
@@ -918,12 +911,58 @@ TEST_F(Periodic, OpenBoundariesKeepTheTensor)
   EXPECT_EQ(lmp->force->kspace->scalar_pressure_flag, 0);
 }
 
-TEST_F(Periodic, PerAtomVirialOfTheScreenedKernelIsAnError)
+TEST_F(Periodic, PerAtomVirialAfterPressureScalarYesIsAnError)
 {
   load(uniform_cube(50, 55));
-  commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4\nkspace_modify kifmm kernel yukawa 2.0\n"
+  commands("pair_style zero 0.1\npair_coeff * *\nkspace_style kifmm 1e-4\nkspace_modify pressure/scalar yes\n"
            "compute s all stress/atom NULL\ncompute ss all reduce sum c_s[1]\nthermo_style custom step c_ss");
   EXPECT_LAMMPS_ERROR(command("run 0"), "per-atom virial");
+}
+
+// periodic yukawa: the virial tensor equals the pair virial of coul/debye with a cutoff beyond
+// which exp(-kappa r) < 1e-16 (it sums the images exactly), in a rectangular box (grid) and a
+// cube (octree for the forces, a grid next to it for the virial); per-atom virials sum to it;
+// pressure/scalar yes gives a third of its trace on the diagonal
+TEST_F(Periodic, ScreenedPressureTensorEqualsCoulDebye)
+{
+  const double kappa = 8.0, rc = 37.0 / kappa;
+  for (const char *box : {"1.3 0.9", "1 1"}) {
+    create();
+    load(uniform_cube(300, 49));
+    double ly, lz;
+    std::sscanf(box, "%lf %lf", &ly, &lz);
+    command(fmt_cmd("change_box all y final 0 {} z final 0 {} remap units box", ly, lz));
+    commands(fmt_cmd("neigh_modify one 100000 page 2000000\npair_style coul/debye {} {}\npair_coeff * *\n"
+                     "run 0 post no", kappa, rc));
+    double ref[6], scale = 0;    // a pair style's virial is per rank
+    MPI_Allreduce(lmp->force->pair->virial, ref, 6, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+    for (int k = 0; k < 3; ++k) scale += std::fabs(ref[k]);
+    commands("pair_style zero 0.01\npair_coeff * *\nkspace_style kifmm 1e-10\n"
+             "kspace_modify kifmm kernel yukawa " + to_s(kappa) + " order 12\n"
+             "compute s all stress/atom NULL\ncompute ss all reduce sum c_s[1] c_s[2] c_s[3] c_s[4] c_s[5] c_s[6]\n"
+             "thermo_style custom step pe pxx pyy pzz pxy pxz pyz c_ss[1] c_ss[2] c_ss[3] c_ss[4] c_ss[5] c_ss[6]\n"
+             "thermo_modify norm no");
+    command("run 0 post no");
+    const double *w = lmp->force->kspace->virial;
+    double err = 0, err_atom = 0;
+    for (int k = 0; k < 6; ++k) {
+      err = std::max(err, std::fabs(w[k] - ref[k]) / scale);
+      err_atom = std::max(err_atom, std::fabs(-evaluate(fmt_cmd("c_ss[{}]", (double) (k + 1))) - w[k]) / scale);
+    }
+    const double offdiag = (std::fabs(ref[3]) + std::fabs(ref[4]) + std::fabs(ref[5])) / scale;
+    if (rank() == 0)
+      std::printf("  yukawa virial, box 1 x %s: %.2e (per-atom sum %.2e; off-diagonal part %.2f)\n", box, err, err_atom,
+                  offdiag);
+    EXPECT_LE(err, 1e-8) << box;
+    EXPECT_LE(err_atom, 1e-10) << box;
+    EXPECT_GT(offdiag, 1e-3) << box;
+    commands("thermo_style custom step pe press\nuncompute ss\nuncompute s\nkspace_modify pressure/scalar yes\n"
+             "run 0 post no");
+    const double tr = (ref[0] + ref[1] + ref[2]) / 3;
+    EXPECT_NEAR(w[0], tr, 1e-8 * scale) << box;
+    EXPECT_NEAR(w[2], tr, 1e-8 * scale) << box;
+    EXPECT_EQ(w[3], 0.0) << box;
+  }
 }
 
 }    // namespace

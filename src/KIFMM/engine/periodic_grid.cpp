@@ -162,8 +162,8 @@ std::vector<double> grid_kernel_values(const KernelSpec &unit, const int k[3], i
         const double k2 = s.k2_of(mv);
         W[0][at] = s.weight_k2(k2);
         if (!moment || k2 == 0.0) continue;
-        const double al2 = s.alpha * s.alpha;
-        const double f = (4 * kPi / s.volume) * std::exp(-k2 / (4 * al2)) * (2 / (k2 * k2) + 1 / (2 * al2 * k2));
+        const double al2 = s.alpha * s.alpha, q2 = k2 + s.kappa * s.kappa;    // Yukawa: k^2 + kappa^2
+        const double f = (4 * kPi / s.volume) * std::exp(-q2 / (4 * al2)) * (2 / (q2 * q2) + 1 / (2 * al2 * q2));
         for (int d = 0; d < 3; ++d) W[1 + d][at] = f * kPi * mv[d] / s.shape[d];
       }
   // sum_m W(m) e^{i k.u} contracted over the z and y axes (separable): B[set][(a * nc1 + y) * nc2 + z]
@@ -233,6 +233,8 @@ std::vector<double> grid_kernel_values(const KernelSpec &unit, const int k[3], i
                 double t, F;
                 s.real(rho, false, t, F);
                 val += t;
+                if (moment)
+                  for (int d = 0; d < 3; ++d) pm[d] += (r[d] + s.period[d] * n[d]) * t;
                 continue;
               }
               if (excluded && rho == 0.0) {
@@ -254,8 +256,8 @@ std::vector<double> grid_kernel_values(const KernelSpec &unit, const int k[3], i
           // added exactly at the targets; scale-free (degree 0)
           const double zt[3] = {zeta[0][x], zeta[1][y], zeta[2][z]};
           const double z2 = zt[0] * zt[0] + zt[1] * zt[1] + zt[2] * zt[2];
-          for (int d = 0; d < 3; ++d)
-            (*moment)[d * nv + at] = pm[d] - zt[d] * val + (2 * kPi / (5 * s.volume)) * zt[d] * z2;
+          const double cN = s.yukawa ? 0.0 : 2 * kPi / (5 * s.volume);    // Yukawa: no background
+          for (int d = 0; d < 3; ++d) (*moment)[d * nv + at] = pm[d] - zt[d] * val + cN * zt[d] * z2;
         }
         val -= quad_unit * (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
         v[at] = val / K;
@@ -507,16 +509,19 @@ std::shared_ptr<const GridKernel> periodic_grid_kernel(const KernelSpec &unit, c
   return g;
 }
 
-std::shared_ptr<const GridMomentKernels> periodic_grid_moment_kernels(const int cells[3], int p, const double *cell_shape,
-                                                                      bool slab)
+std::shared_ptr<const GridMomentKernels> periodic_grid_moment_kernels(const KernelSpec &unit, const int cells[3], int p,
+                                                                      const double *cell_shape, bool slab)
 {
   (void) fftw_mutex();
   static std::mutex mtx;
-  using Key = std::tuple<int, int, int, int, double, double, double, bool>;
+  using Key = std::tuple<double, int, int, int, int, double, double, double, bool>;
   static std::map<Key, std::shared_ptr<const GridMomentKernels>> cache;
   const double one[3] = {1.0, 1.0, 1.0};
   const double *cs = cell_shape ? cell_shape : one;
-  const Key key{cells[0], cells[1], cells[2], p, cs[0], cs[1], cs[2], slab};
+  if (slab && unit.type != KernelType::Laplace)
+    throw std::invalid_argument("kifmm: the slab (periodic_dims 2) is for the Laplace kernel");
+  const Key key{unit.type == KernelType::Yukawa ? unit.kappa : -1.0, cells[0], cells[1], cells[2], p,
+                cs[0], cs[1], cs[2], slab};
   std::lock_guard<std::mutex> lock(mtx);
   auto it = cache.find(key);
   if (it != cache.end()) return it->second;
@@ -525,7 +530,7 @@ std::shared_ptr<const GridMomentKernels> periodic_grid_moment_kernels(const int 
     throw std::invalid_argument("kifmm: a periodic grid needs at least 3 cells per periodic side");
   std::vector<double> mom;
   if (slab) slab_kernel_values(cells, p, cs, &mom);
-  else grid_kernel_values(KernelSpec{}, cells, p, cs, &mom);
+  else grid_kernel_values(unit, cells, p, cs, &mom);
   auto g = std::make_shared<GridMomentKernels>();
   const std::size_t nv = mom.size() / 3;
   for (int a = 0; a < 3; ++a)

@@ -117,20 +117,22 @@ inline std::shared_ptr<const GridKernel> periodic_grid_kernel(const KernelSpec &
   return periodic_grid_kernel(unit, cells, p, nullptr);
 }
 
-// Offset-weighted kernels of the periodic virial (Laplace, p p p and slabs): for the offset class D and
+// Offset-weighted kernels of the periodic virial (Laplace and Yukawa in p p p, Laplace in slabs): for the offset class D and
 // component a, sum over the far images n of (D_n)_a G(r_n), D_n = c_t - c_s - n L the offset of
 // the cells' centres and r_n the separation of the points, as P_a(r) - zeta_a G_per(r) with
 // P_a(r) = sum_n (r + n L)_a G(r + n L) (Ewald: real-space (r_n)_a erfc(alpha r_n) / r_n, reciprocal
 // (4 pi / V) k_a exp(-k^2/4alpha^2) (2/k^4 + 1/(2 alpha^2 k^2)) sin(k.r); grad P_a = e_a G_per + the
 // strain derivative of G_per) and zeta = r - D_n (within the cells); less the non-harmonic part
 // -(2 pi / 5 V) zeta_a |zeta|^2, which the caller adds at the targets. Degree 0: the tables are
-// the physical kernels at any cell size. Slab (p p f): the images over the x-y lattice only, no
-// non-harmonic part (slab_kernel_values). Cached like periodic_grid_kernel.
+// the physical kernels at any cell size. Yukawa (`unit` as periodic_grid_kernel): k^2 + kappa^2
+// for k^2 in the reciprocal terms' exp and powers, no background part. Slab (p p f): the images
+// over the x-y lattice only, no non-harmonic part (slab_kernel_values). Cached like
+// periodic_grid_kernel.
 struct GridMomentKernels {
   std::shared_ptr<const GridKernel> a[3];
   std::size_t bytes() const { return a[0]->bytes() + a[1]->bytes() + a[2]->bytes(); }
 };
-std::shared_ptr<const GridMomentKernels> periodic_grid_moment_kernels(const int cells[3], int p,
+std::shared_ptr<const GridMomentKernels> periodic_grid_moment_kernels(const KernelSpec &unit, const int cells[3], int p,
                                                                       const double *cell_shape, bool slab = false);
 
 // In place on the frequencies [f0, f1) (multiples of 16) of z[cell * nfreq + f] (cell-major,

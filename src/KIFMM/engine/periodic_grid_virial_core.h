@@ -1,5 +1,5 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
-// Periodic virial on the single-level grid: FmmEvaluator<K>::periodic_virial_fields (included
+// Periodic virial on the single-level grid (Laplace; Yukawa in p p p): FmmEvaluator<K>::periodic_virial_fields (included
 // at the end of fmm_core.h; the formulas are in kifmm.h at periodic_point_virial and in
 // periodic_grid.h at periodic_grid_moment_kernels).
 //
@@ -29,10 +29,10 @@ namespace kifmm {
 
 template <class K> void FmmEvaluator<K>::check_virial_grid() const
 {
-  if (!std::is_same_v<K, LaplaceKernel> || !grid_ || opt_.periodic_dims < 2)
+  if (!(std::is_same_v<K, LaplaceKernel> || std::is_same_v<K, YukawaKernel>) || !grid_ || opt_.periodic_dims < 2)
     throw std::invalid_argument(
-        "kifmm: the periodic virial is computed for the Laplace kernel on the single-level grid "
-        "(Options::periodic_grid > 0) with three periodic dimensions or a slab");
+        "kifmm: the periodic virial is computed for the Laplace and Yukawa kernels on the single-level "
+        "grid (Options::periodic_grid > 0) with three periodic dimensions or a slab");
 }
 
 // offsets from the cells' centres (wrapped coordinates)
@@ -91,13 +91,15 @@ void FmmEvaluator<K>::periodic_virial_fields(Communicator *comm, std::size_t n, 
 
 template <class K> void FmmEvaluator<K>::grid_offset_field(Communicator *comm, double *psi, double *chi)
 {
-  if constexpr (std::is_same_v<K, LaplaceKernel>) {
+  if constexpr (std::is_same_v<K, LaplaceKernel> || std::is_same_v<K, YukawaKernel>) {
     const GridGeometry g = grid_geometry();
     const std::vector<int> &sb = grid_src_begin_, &tb = grid_trg_begin_, &own_end = grid_own_end_;
     const std::size_t nt = tx_.size();
     const int kc = g.kc;
     // ---- far part: three convolutions of the upward densities (kept from the evaluation)
-    const auto mk = periodic_grid_moment_kernels(g.k, p_, g.cs, g.slab);
+    KernelSpec unit;    // Laplace, or Yukawa with kappa * H (unit cell), as grid_operators
+    if constexpr (std::is_same_v<K, YukawaKernel>) unit = KernelSpec{KernelType::Yukawa, k_.kappa * g.H};
+    const auto mk = periodic_grid_moment_kernels(unit, g.k, p_, g.cs, g.slab);
     std::vector<double> occupied(kc);
     for (int b = 0; b < kc; ++b) occupied[b] = own_end[b] - sb[b];
     grid_reduce(comm, occupied.data(), kc);
@@ -157,8 +159,8 @@ template <class K> void FmmEvaluator<K>::grid_offset_field(Communicator *comm, d
     }
     // ---- background: d_b of sum_j q_j N_a(u - w_j), N_a(z) = -(2 pi / 5 V) z_a |z|^2
     // dipoles: minus mu . grad_z of the charge terms, from P = sum mu and R_ab = sum mu_a w_b.
-    // A slab has none (its kernels are harmonic).
-    if (g.slab) return;
+    // A slab and the Yukawa kernel have none (their kernels have no background).
+    if (g.slab || std::is_same_v<K, YukawaKernel>) return;
     double mom[25] = {0};    // Q, M1[3], M2[9], P[3], R[9]
     for (int b = 0; b < kc; ++b) {
       double c[3];

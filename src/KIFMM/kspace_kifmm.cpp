@@ -26,6 +26,7 @@
 #include <cstring>
 #include <filesystem>
 #include <mpi.h>
+#include <new>
 #include <random>
 #include <stdexcept>
 

@@ -367,6 +367,37 @@ double ewald_energy(const Dipoles &s, const double L[3])
   return 0.5 * e;
 }
 
+// the virial tensor (xx yy zz xy xz yz) of charges and dipoles from the evaluator of these options
+std::vector<double> dipole_virial_total(const kifmm::Options &o, const Dipoles &s)
+{
+  const std::size_t n = s.p.size();
+  auto ev = kifmm::make_evaluator({}, o);
+  const Field f = fmm(*ev, s);
+  std::vector<double> v(6 * n), W(6, 0.0);
+  kifmm::periodic_dipole_point_virial(*ev, n, s.p.xyz.data(), s.p.q.data(), s.mu.data(), n, s.p.xyz.data(),
+                                      s.p.q.data(), s.mu.data(), f.grad.data(), f.hess.data(), -1.0, v.data());
+  for (std::size_t k = 0; k < n; ++k)
+    for (int m = 0; m < 6; ++m) W[m] += v[6 * k + m];
+  return W;
+}
+
+// -dU/d(strain_aa) by central differences (strain 1e-5) of energy(dipoles, cell edges): the
+// positions along axis a scaled, and the edge a when stretch_edge; moments fixed
+template <class Energy>
+double minus_strain_derivative(const Dipoles &s, const double L[3], int a, bool stretch_edge, const Energy &energy)
+{
+  const double eps = 1e-5;
+  double de[2];
+  for (int sg : {1, -1}) {
+    Dipoles t = s;
+    double Lt[3] = {L[0], L[1], L[2]};
+    if (stretch_edge) Lt[a] *= 1 + sg * eps;
+    for (std::size_t k = 0; k < t.p.size(); ++k) t.p.xyz[3 * k + a] *= 1 + sg * eps;
+    de[sg > 0 ? 0 : 1] = energy(t, Lt);
+  }
+  return -(de[0] - de[1]) / (2 * eps);
+}
+
 // the periodic virial of charges and dipoles (grid, order 12: the dipoles' virial converges
 // more slowly with the order than their forces): its diagonal is minus the derivative of the
 // Ewald energy under a stretch of one axis (positions scaled, moments fixed)
@@ -376,32 +407,15 @@ TEST(Dipoles, PeriodicVirialIsTheStrainDerivative)
     Points pts = uniform_cube(120, 71);
     const double shape[3] = {1.0, sy, 1.0};
     for (std::size_t i = 0; i < pts.size(); ++i) pts.xyz[3 * i + 1] *= sy;
-    Dipoles s = random_dipoles(neutral(pts), 72, true);
-    const std::size_t n = s.p.size();
+    const Dipoles s = random_dipoles(neutral(pts), 72, true);
     kifmm::Options o = periodic_options(12, 32, 1.0, nullptr, sy == 1.0 ? 4 : 6);
     for (int d = 0; d < 3; ++d) o.root_shape[d] = shape[d];
-    auto ev = kifmm::make_evaluator({}, o);
-    const Field f = fmm(*ev, s);
-    std::vector<double> v(6 * n);
-    kifmm::periodic_dipole_point_virial(*ev, n, s.p.xyz.data(), s.p.q.data(), s.mu.data(), n, s.p.xyz.data(),
-                                        s.p.q.data(), s.mu.data(), f.grad.data(), f.hess.data(), -1.0, v.data());
-    double W[6] = {0, 0, 0, 0, 0, 0};
-    for (std::size_t k = 0; k < n; ++k)
-      for (int m = 0; m < 6; ++m) W[m] += v[6 * k + m];
+    const std::vector<double> W = dipole_virial_total(o, s);
     const double L[3] = {2.0, 2.0 * sy, 2.0};
-    const double eps = 1e-5;
     for (int a = 0; a < 3; ++a) {
-      double de[2];
-      for (int sg : {1, -1}) {
-        Dipoles t = s;
-        double Lt[3] = {L[0], L[1], L[2]};
-        Lt[a] *= 1 + sg * eps;
-        for (std::size_t k = 0; k < n; ++k) t.p.xyz[3 * k + a] *= 1 + sg * eps;
-        de[sg > 0 ? 0 : 1] = ewald_energy(t, Lt);
-      }
-      const double dU = (de[0] - de[1]) / (2 * eps);
-      std::printf("shape y %.1f: W_%d%d %.10f, -dU/de %.10f\n", sy, a, a, W[a], -dU);
-      EXPECT_NEAR(W[a], -dU, 1e-8 * (std::fabs(W[0]) + std::fabs(W[1]) + std::fabs(W[2]))) << "axis " << a;
+      const double w = minus_strain_derivative(s, L, a, true, ewald_energy);
+      std::printf("shape y %.1f: W_%d%d %.10f, -dU/de %.10f\n", sy, a, a, W[a], w);
+      EXPECT_NEAR(W[a], w, 1e-8 * (std::fabs(W[0]) + std::fabs(W[1]) + std::fabs(W[2]))) << "axis " << a;
     }
   }
 }
@@ -417,38 +431,21 @@ TEST(Dipoles, SlabVirialIsTheStrainDerivative)
   Points pts = uniform_cube(120, 73);
   for (std::size_t i = 0; i < pts.size(); ++i)
     for (int d = 0; d < 3; ++d) pts.xyz[3 * i + d] *= shape[d];
-  Dipoles s = random_dipoles(neutral(pts), 74, true);
-  const std::size_t n = s.p.size();
-  kifmm::Options o = periodic_options(12, 32, 1.0, nullptr, kifmm::choose_slab_grid(12, n, shape).grid);
+  const Dipoles s = random_dipoles(neutral(pts), 74, true);
+  kifmm::Options o = periodic_options(12, 32, 1.0, nullptr, kifmm::choose_slab_grid(12, s.p.size(), shape).grid);
   o.periodic_dims = 2;
   for (int d = 0; d < 3; ++d) o.root_shape[d] = shape[d];
-  auto ev = kifmm::make_evaluator({}, o);
-  const Field f = fmm(*ev, s);
-  std::vector<double> v(6 * n);
-  kifmm::periodic_dipole_point_virial(*ev, n, s.p.xyz.data(), s.p.q.data(), s.mu.data(), n, s.p.xyz.data(),
-                                      s.p.q.data(), s.mu.data(), f.grad.data(), f.hess.data(), -1.0, v.data());
-  double W[6] = {0, 0, 0, 0, 0, 0};
-  for (std::size_t k = 0; k < n; ++k)
-    for (int m = 0; m < 6; ++m) W[m] += v[6 * k + m];
-  auto slab_energy = [&](const Dipoles &t, const double Lt[3]) {
+  const std::vector<double> W = dipole_virial_total(o, s);
+  auto slab_energy = [](const Dipoles &t, const double Lt[3]) {
     double Mz = 0;
-    for (std::size_t k = 0; k < n; ++k) Mz += t.p.q[k] * t.p.xyz[3 * k + 2] + t.mu[3 * k + 2];
+    for (std::size_t k = 0; k < t.p.size(); ++k) Mz += t.p.q[k] * t.p.xyz[3 * k + 2] + t.mu[3 * k + 2];
     return ewald_energy(t, Lt) + 2 * kPi * Mz * Mz / (Lt[0] * Lt[1] * Lt[2]);
   };
   const double L[3] = {2.0, 2.0 * shape[1], 2.0 * shape[2] + 28.0};
-  const double eps = 1e-5;
   for (int a = 0; a < 3; ++a) {
-    double de[2];
-    for (int sg : {1, -1}) {
-      Dipoles t = s;
-      double Lt[3] = {L[0], L[1], L[2]};
-      if (a < 2) Lt[a] *= 1 + sg * eps;
-      for (std::size_t k = 0; k < n; ++k) t.p.xyz[3 * k + a] *= 1 + sg * eps;
-      de[sg > 0 ? 0 : 1] = slab_energy(t, Lt);
-    }
-    const double dU = (de[0] - de[1]) / (2 * eps);
-    std::printf("slab: W_%d%d %.10f, -dU/de %.10f\n", a, a, W[a], -dU);
-    EXPECT_NEAR(W[a], -dU, 1e-7 * (std::fabs(W[0]) + std::fabs(W[1]) + std::fabs(W[2]))) << "axis " << a;
+    const double w = minus_strain_derivative(s, L, a, a < 2, slab_energy);
+    std::printf("slab: W_%d%d %.10f, -dU/de %.10f\n", a, a, W[a], w);
+    EXPECT_NEAR(W[a], w, 1e-7 * (std::fabs(W[0]) + std::fabs(W[1]) + std::fabs(W[2]))) << "axis " << a;
   }
 }
 

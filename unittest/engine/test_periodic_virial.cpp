@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <complex>
 #include <stdexcept>
 
@@ -103,6 +104,14 @@ Points case_points(std::size_t n, unsigned seed, const double c[3], double h, co
   return p;
 }
 
+// the fewest grid cells (3 .. 12 along the longest side) that fit the cell at order 10; 0: none
+int fitting_grid(const double shape[3])
+{
+  for (int k = 3; k <= 12; ++k)
+    if (kifmm::grid_fits_cell(10, k, shape)) return k;
+  return 0;
+}
+
 kifmm::Options grid_options(int order, int grid, double h, const double c[3], const double shape[3])
 {
   kifmm::Options o = periodic_options(order, 32, h, c, grid);
@@ -127,6 +136,57 @@ std::vector<double> total(const std::vector<double> &v)
   return t;
 }
 
+// The virial tensor W (xx yy zz xy xz yz) and the energy U = 1/2 sum q phi of the evaluator of
+// these options (prefactor -1: F = -q grad, the force for U)
+struct GlobalVirial {
+  std::vector<double> W;
+  double U = 0;
+};
+GlobalVirial global_virial(const kifmm::KernelSpec &kernel, const kifmm::Options &o, const Points &p)
+{
+  const std::size_t n = p.size();
+  auto ev = kifmm::make_evaluator(kernel, o);
+  std::vector<double> g(3 * n), pot(n), v(6 * n);
+  ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());
+  kifmm::periodic_point_virial(*ev, nullptr, n, p.xyz.data(), p.q.data(), g.data(), -1.0, v.data());
+  GlobalVirial r{total(v), 0.0};
+  for (std::size_t i = 0; i < n; ++i) r.U += 0.5 * p.q[i] * pot[i];
+  return r;
+}
+
+// dU/d(strain_aa) by central differences (strain 1e-4) of an exact lattice energy: the points
+// and the cell (half-widths h shape, centre c) stretched along `axis` about c; `potentials`
+// gives the exact potentials of points in the cell of largest half-width H and shape sh
+using LatticePotentials =
+    std::function<void(const double c[3], double H, const double sh[3], const Points &p, double *pot)>;
+double strain_derivative(const Points &p, const double c[3], double h, const double shape[3], int axis,
+                         const LatticePotentials &potentials)
+{
+  const std::size_t n = p.size();
+  auto energy = [&](double eps) {
+    Points s = p;
+    double sh[3] = {shape[0], shape[1], shape[2]};
+    for (std::size_t i = 0; i < n; ++i) s.xyz[3 * i + axis] = c[axis] + (s.xyz[3 * i + axis] - c[axis]) * (1 + eps);
+    sh[axis] *= 1 + eps;
+    const double hs = std::max(sh[0], std::max(sh[1], sh[2]));
+    for (double &x : sh) x /= hs;
+    std::vector<double> ps(n);
+    potentials(c, h * hs, sh, s, ps.data());
+    double u = 0;
+    for (std::size_t i = 0; i < n; ++i) u += 0.5 * s.q[i] * ps[i];
+    return u;
+  };
+  const double eps = 1e-4;
+  return (energy(eps) - energy(-eps)) / (2 * eps);
+}
+
+LatticePotentials ewald_potentials(const kifmm::KernelSpec &kernel)
+{
+  return [kernel](const double c[3], double H, const double sh[3], const Points &s, double *pot) {
+    kifmm::periodic_direct_sum(kernel, c, H, s.size(), s.xyz.data(), s.q.data(), s.size(), s.xyz.data(), pot, nullptr, sh);
+  };
+}
+
 }    // namespace
 
 TEST(PeriodicVirial, PerPointEqualsEwald)
@@ -134,9 +194,7 @@ TEST(PeriodicVirial, PerPointEqualsEwald)
   const double c[3] = {0.1, -0.2, 0.3}, h = 0.5;
   for (const Case &cs : {Case{{1.0, 1.0, 1.0}, 0.0}, Case{{1.0, 0.8, 0.9}, 0.0}, Case{{1.0, 0.6, 0.6}, 0.15}}) {
     const Points p = case_points(300, 7, c, h, cs.shape, cs.shift);
-    int grid = 0;
-    for (int k = 3; k <= 12 && !grid; ++k)
-      if (kifmm::grid_fits_cell(10, k, cs.shape)) grid = k;
+    const int grid = fitting_grid(cs.shape);
     ASSERT_GT(grid, 0) << cs.shape[1] << " " << cs.shape[2];
     const std::vector<double> v = fmm_point_virial(grid_options(10, grid, h, c, cs.shape), p);
     const double L[3] = {2 * h * cs.shape[0], 2 * h * cs.shape[1], 2 * h * cs.shape[2]};
@@ -156,37 +214,14 @@ TEST(PeriodicVirial, TraceIsTheEnergyAndDiagonalIsTheStrainDerivative)
   // differences of the exact (Ewald) energy of the strained box
   const double c[3] = {0, 0, 0}, h = 0.5, shape[3] = {1.0, 0.7, 0.85};
   const Points p = case_points(200, 11, c, h, shape, 0.05);
-  const std::size_t n = p.size();
-  int grid = 0;
-  for (int k = 3; k <= 12 && !grid; ++k)
-    if (kifmm::grid_fits_cell(10, k, shape)) grid = k;
+  const int grid = fitting_grid(shape);
   ASSERT_GT(grid, 0);
-  // prefactor -1: F = -q grad, the Coulomb force for U = +1/2 sum q phi
-  auto ev = kifmm::make_evaluator(kifmm::KernelSpec{}, grid_options(10, grid, h, c, shape));
-  std::vector<double> g(3 * n), pot(n), v(6 * n);
-  ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());
-  kifmm::periodic_point_virial(*ev, nullptr, n, p.xyz.data(), p.q.data(), g.data(), -1.0, v.data());
-  const std::vector<double> W = total(v);
-  double U = 0;
-  for (std::size_t i = 0; i < n; ++i) U += 0.5 * p.q[i] * pot[i];
+  const GlobalVirial g = global_virial(kifmm::KernelSpec{}, grid_options(10, grid, h, c, shape), p);
+  const std::vector<double> &W = g.W;
+  const double U = g.U;
   EXPECT_NEAR(W[0] + W[1] + W[2], U, 1e-7 * std::fabs(U));
-  auto energy = [&](int axis, double eps) {
-    Points s = p;
-    double sh[3] = {shape[0], shape[1], shape[2]};
-    for (std::size_t i = 0; i < n; ++i) s.xyz[3 * i + axis] *= 1 + eps;
-    sh[axis] *= 1 + eps;
-    const double hs = std::max(sh[0], std::max(sh[1], sh[2]));
-    for (double &x : sh) x /= hs;
-    std::vector<double> ps(n);
-    kifmm::periodic_direct_sum(kifmm::KernelSpec{}, c, h * hs, n, s.xyz.data(), s.q.data(), n, s.xyz.data(), ps.data(),
-                               nullptr, sh);
-    double u = 0;
-    for (std::size_t i = 0; i < n; ++i) u += 0.5 * s.q[i] * ps[i];
-    return u;
-  };
-  const double eps = 1e-4;
   for (int a = 0; a < 3; ++a) {
-    const double dU = (energy(a, eps) - energy(a, -eps)) / (2 * eps);
+    const double dU = strain_derivative(p, c, h, shape, a, ewald_potentials(kifmm::KernelSpec{}));
     EXPECT_NEAR(W[a], -dU, 1e-6 * std::fabs(U)) << "axis " << a;
   }
   // anisotropic: the diagonal components differ
@@ -262,31 +297,16 @@ TEST(PeriodicVirial, SlabDiagonalIsTheStrainDerivative)
     for (double q : p.q) Q += q;
     for (double &q : p.q) q += shift - Q / p.size();
     const std::size_t n = p.size();
-    auto ev = kifmm::make_evaluator(kifmm::KernelSpec{}, slab_grid_options(10, n, h, c, shape));
-    std::vector<double> g(3 * n), pot(n), v(6 * n);
-    ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());
-    kifmm::periodic_point_virial(*ev, nullptr, n, p.xyz.data(), p.q.data(), g.data(), -1.0, v.data());
-    const std::vector<double> W = total(v);
-    double U = 0;
-    for (std::size_t i = 0; i < n; ++i) U += 0.5 * p.q[i] * pot[i];
+    const GlobalVirial gv = global_virial(kifmm::KernelSpec{}, slab_grid_options(10, n, h, c, shape), p);
+    const std::vector<double> &W = gv.W;
+    const double U = gv.U;
     EXPECT_NEAR(W[0] + W[1] + W[2], U, 1e-7 * std::fabs(U)) << "shift " << shift;
-    auto energy = [&](int axis, double eps) {
-      Points s = p;
-      double sh[3] = {shape[0], shape[1], shape[2]};
-      for (std::size_t i = 0; i < n; ++i) s.xyz[3 * i + axis] *= 1 + eps;
-      sh[axis] *= 1 + eps;
-      const double hs = std::max(sh[0], sh[1]);
-      for (double &x : sh) x /= hs;
-      std::vector<double> ps(n);
-      kifmm::slab_direct_sum(c, h * hs, sh, n, s.xyz.data(), s.q.data(), n, s.xyz.data(), ps.data(), nullptr);
-      double u = 0;
-      for (std::size_t i = 0; i < n; ++i) u += 0.5 * s.q[i] * ps[i];
-      return u;
+    const LatticePotentials slab = [](const double cc[3], double H, const double sh[3], const Points &s, double *pot) {
+      kifmm::slab_direct_sum(cc, H, sh, s.size(), s.xyz.data(), s.q.data(), s.size(), s.xyz.data(), pot, nullptr);
     };
-    const double eps = 1e-4;
     double dU[3];
     for (int a = 0; a < 3; ++a) {
-      dU[a] = (energy(a, eps) - energy(a, -eps)) / (2 * eps);
+      dU[a] = strain_derivative(p, c, h, shape, a, slab);
       EXPECT_NEAR(W[a], -dU[a], 1e-6 * std::fabs(U)) << "axis " << a << " shift " << shift;
     }
     std::printf("  slab virial (net charge %.2f): W %.8g %.8g %.8g, -dU/de %.8g %.8g %.8g, U %.8g\n", shift * n, W[0], W[1],
@@ -308,9 +328,7 @@ TEST(PeriodicVirial, YukawaPerPointEqualsTheImageSumAndDiagonalIsTheStrainDeriva
   const kifmm::KernelSpec yk{kifmm::KernelType::Yukawa, kappa};
   const Points p = case_points(200, 19, c, h, shape, 0.1);
   const std::size_t n = p.size();
-  int grid = 0;
-  for (int k = 3; k <= 12 && !grid; ++k)
-    if (kifmm::grid_fits_cell(10, k, shape)) grid = k;
+  const int grid = fitting_grid(shape);
   ASSERT_GT(grid, 0);
   const kifmm::Options o = grid_options(10, grid, h, c, shape);
   const std::vector<double> v = fmm_point_virial(o, p, yk);
@@ -336,28 +354,11 @@ TEST(PeriodicVirial, YukawaPerPointEqualsTheImageSumAndDiagonalIsTheStrainDeriva
   std::printf("  yukawa per-point virial %.2e, total %.2e\n", e, et);
   EXPECT_LT(e, 1e-6);
   EXPECT_LT(et, 1e-6);
-  // the diagonal: W_aa = -dU/d(strain_aa), U = 1/2 sum q phi (prefactor -1: F = -q grad)
-  auto ev = kifmm::make_evaluator(yk, o);
-  std::vector<double> g(3 * n), pot(n), w(6 * n);
-  ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());
-  kifmm::periodic_point_virial(*ev, nullptr, n, p.xyz.data(), p.q.data(), g.data(), -1.0, w.data());
-  const std::vector<double> W = total(w);
-  auto energy = [&](int axis, double eps) {
-    Points s = p;
-    double sh[3] = {shape[0], shape[1], shape[2]};
-    for (std::size_t i = 0; i < n; ++i) s.xyz[3 * i + axis] = c[axis] + (s.xyz[3 * i + axis] - c[axis]) * (1 + eps);
-    sh[axis] *= 1 + eps;
-    const double hs = std::max(sh[0], std::max(sh[1], sh[2]));
-    for (double &x : sh) x /= hs;
-    std::vector<double> ps(n);
-    kifmm::periodic_direct_sum(yk, c, h * hs, n, s.xyz.data(), s.q.data(), n, s.xyz.data(), ps.data(), nullptr, sh);
-    double u = 0;
-    for (std::size_t i = 0; i < n; ++i) u += 0.5 * s.q[i] * ps[i];
-    return u;
-  };
-  const double eps = 1e-4, scale = std::fabs(W[0]) + std::fabs(W[1]) + std::fabs(W[2]);
+  // the diagonal: W_aa = -dU/d(strain_aa)
+  const std::vector<double> W = global_virial(yk, o, p).W;
+  const double scale = std::fabs(W[0]) + std::fabs(W[1]) + std::fabs(W[2]);
   for (int a = 0; a < 3; ++a) {
-    const double dU = (energy(a, eps) - energy(a, -eps)) / (2 * eps);
+    const double dU = strain_derivative(p, c, h, shape, a, ewald_potentials(yk));
     std::printf("  yukawa W_%d%d %.10g, -dU/de %.10g\n", a, a, W[a], -dU);
     EXPECT_NEAR(W[a], -dU, 1e-6 * scale) << "axis " << a;
   }

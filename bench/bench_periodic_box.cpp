@@ -8,7 +8,9 @@
 // targets. The relative RMS gradient error of each, on --sample targets against the Ewald sum
 // (periodic_direct_sum), is printed beside.
 //   bench_periodic_box [--sizes 1e4,1e5] [--orders 4,6,8] [--boxes 2:1:1,1:1:0.5,...]
-//                      [--reps 3] [--sample 200]
+//                      [--reps 3] [--sample 200] [--phases] [--box-grid K]
+// --phases: a row per evaluator with the time of its passes (upward, M2L, downward, near field).
+// --box-grid K: the boxes on the grid with K cells along their longest axis, not the choice.
 #include "cost_model.h"
 #include "fmm_core.h"
 #include "kifmm.h"
@@ -54,7 +56,8 @@ struct Box {
 };
 
 // The evaluator kspace_style kifmm would use for these points in this box (largest edge 2).
-std::unique_ptr<Evaluator> chosen(const bench::Points &p, const Box &b, int order, std::string &what)
+// grid > 0: that grid (cells along the longest axis) instead of the choice.
+std::unique_ptr<Evaluator> chosen(const bench::Points &p, const Box &b, int order, std::string &what, int grid = 0)
 {
   Options o;
   o.order = order;
@@ -69,6 +72,7 @@ std::unique_ptr<Evaluator> chosen(const bench::Points &p, const Box &b, int orde
   TreePlan plan = plan_tree(o, req);
   o = plan.options;
   choose_tree_from_points(KernelSpec{}, req, o, p.size(), p.xyz.data());
+  if (grid > 0) o.periodic_grid = grid;
   if (o.periodic_grid > 0) {
     int c[3];
     grid_cells_per_axis(o.periodic_grid, o.root_shape, c);
@@ -118,14 +122,19 @@ int main(int argc, char **argv)
   std::vector<std::string> sizes{"1e4", "1e5"}, orders{"4", "6", "8"},
       boxes{"1.3:1:1", "2:1:1", "1:1:0.5", "4:1:1", "8:1:1"};
   int reps = 3, sample = 200;
+  bool phases = false;
+  int box_grid = 0;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--sizes") && i + 1 < argc) sizes = split(argv[++i], ',');
     else if (!std::strcmp(argv[i], "--orders") && i + 1 < argc) orders = split(argv[++i], ',');
     else if (!std::strcmp(argv[i], "--boxes") && i + 1 < argc) boxes = split(argv[++i], ',');
     else if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) reps = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--sample") && i + 1 < argc) sample = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--phases")) phases = true;
+    else if (!std::strcmp(argv[i], "--box-grid") && i + 1 < argc) box_grid = std::atoi(argv[++i]);
     else {
-      std::fprintf(stderr, "usage: %s [--sizes ..] [--orders ..] [--boxes a:b:c,..] [--reps R] [--sample S]\n",
+      std::fprintf(stderr, "usage: %s [--sizes ..] [--orders ..] [--boxes a:b:c,..] [--reps R] [--sample S] [--phases] "
+                   "[--box-grid K]\n",
                    argv[0]);
       return 2;
     }
@@ -146,7 +155,7 @@ int main(int argc, char **argv)
         const Box box{bs, {std::atof(e[0].c_str()), std::atof(e[1].c_str()), std::atof(e[2].c_str())}};
         const bench::Points pb = box_points(n, box, 7);
         std::string bw;
-        auto eb = chosen(pb, box, order, bw);
+        auto eb = chosen(pb, box, order, bw, box_grid);
         std::vector<double> pot(n), gb(3 * n), gc(3 * n);
         eb->evaluate(n, pb.xyz.data(), pb.q.data(), n, pb.xyz.data(), pot.data(), gb.data());    // operators
         ec->evaluate(n, pc.xyz.data(), pc.q.data(), n, pc.xyz.data(), pot.data(), gc.data());
@@ -162,6 +171,12 @@ int main(int argc, char **argv)
         std::printf("| %s | %d | %s | %s | %s | %.2f | %.4f | %.4f | %.1e | %.1e |\n", ns.c_str(), order, bs.c_str(),
                     bw.c_str(), cw.c_str(), tb / tc, tb, tc, sampled_error(*eb, pb, gb, sample),
                     sampled_error(*ec, pc, gc, sample));
+        if (phases)
+          for (const Evaluator *ev : {eb.get(), ec.get()}) {
+            const Stats &st = ev->stats();
+            std::printf("|   phases (%s) | upward %.4f | m2l %.4f | downward %.4f | p2p %.4f | cells %zu |\n",
+                        ev == eb.get() ? "box" : "cube", st.t_upward, st.t_m2l, st.t_downward, st.t_p2p, st.n_cells);
+          }
         std::fflush(stdout);
       }
     }

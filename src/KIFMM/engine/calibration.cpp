@@ -310,6 +310,23 @@ const GridRow kGridCost[] = {
 };
 }    // namespace
 
+namespace {
+bool dft_length_has_codelets(int n)
+{
+  for (int f : {2, 3, 5, 7, 11, 13})
+    while (n % f == 0) n /= f;
+  return n == 1;
+}
+}    // namespace
+
+double grid_modelled_cells(const int kd[3], bool open_z)
+{
+  const double cells = (double) kd[0] * kd[1] * (open_z ? 2 * kd[2] : kd[2]);
+  const bool codelets = dft_length_has_codelets(kd[0]) && dft_length_has_codelets(kd[1]) &&
+      dft_length_has_codelets(open_z ? 2 * kd[2] : kd[2]);
+  return codelets ? cells : kGridPrimeLengthFactor * cells;
+}
+
 TreeCounts uniform_grid_counts(std::size_t n, int k, const double *shape)
 {
   TreeCounts t;
@@ -319,7 +336,7 @@ TreeCounts uniform_grid_counts(std::size_t n, int k, const double *shape)
   t.near_pairs = 27 * cells * m * m / 2;
   t.self_pairs = cells * m * m / 2;
   t.entries = 14 * cells;
-  t.cells = cells;
+  t.cells = grid_modelled_cells(kd, false);
   return t;
 }
 
@@ -332,7 +349,7 @@ TreeCounts grid_counts(std::size_t n, const double *xyz, const double center[3],
   std::vector<double> occ(kc, 0.0);
   for (std::size_t i = 0; i < n; ++i) occ[grid_cell_index(xyz + 3 * i, center, half_width, shape, kd)] += 1;
   TreeCounts t;
-  t.cells = open_z ? 2.0 * kc : kc;    // a slab: the convolution zero-padded along z
+  t.cells = grid_modelled_cells(kd, open_z);    // a slab: the convolution zero-padded along z
   t.entries = 14.0 * kc;
   for (int b = 0; b < kc; ++b) {
     if (occ[b] == 0) continue;
@@ -366,7 +383,7 @@ int max_grid_cells(int order)
 {
   const int last = kGridCost[sizeof kGridCost / sizeof kGridCost[0] - 1].order;
   if (order > last || order < 2) return 0;
-  const double per_cell = 16.0 * m2l_nfreq(order);    // bytes of kernel (and buffer) per cell
+  const double per_cell = 16.0 * grid_row_stride(order);    // bytes of kernel (and buffer) per cell
   int k = 3;
   while ((double) (k + 1) * (k + 1) * (k + 1) * per_cell <= 64e6) ++k;
   return k;
@@ -375,7 +392,7 @@ int max_grid_cells(int order)
 // cells of a grid within the memory bound (kernels and convolution buffer at most 64 MB each)
 double grid_memory_cells(int order)
 {
-  return 64e6 / (16.0 * m2l_nfreq(std::min(std::max(order, 2), 16)));
+  return 64e6 / (16.0 * grid_row_stride(std::min(std::max(order, 2), 16)));
 }
 
 int max_grid_cells_long(int order, const double *shape)
@@ -417,7 +434,7 @@ TreeChoice choose_slab_grid(int order, std::size_t n, const double shape[3])
     t.near_pairs = 27 * cells * m * m / 2;
     t.self_pairs = cells * m * m / 2;
     t.entries = 14 * cells;
-    t.cells = (double) kd[0] * kd[1] * 2 * kd[2];    // the padded convolution
+    t.cells = grid_modelled_cells(kd, true);    // the padded convolution
     const double c = modelled_grid_cost(order, n, t);
     if (g.grid == 0 || c < g.cost) {
       g.cost = c;

@@ -110,6 +110,13 @@ TreeCounts uniform_grid_counts(std::size_t n, int k, const double *shape = nullp
 TreeCounts grid_counts(std::size_t n, const double *xyz, const double center[3], double half_width, int k,
                        const double *shape = nullptr, bool open_z = false);
 double grid_cell_cost(int order);    // seconds
+// Cells of a grid as the model counts them: kd[0] kd[1] kd[2] (open_z: twice, the convolution
+// is zero-padded along z), times kGridPrimeLengthFactor when a length of the DFT over the cells
+// has a prime factor above 13 (FFTW has straight-line codelets up to 13; longer prime factors
+// take its slower general algorithms: at order 8, 23 x 3 x 3 cells cost 1.2x as much per cell
+// as 24 x 3 x 3, bench/results/periodic_grid_dft_lengths.md).
+constexpr double kGridPrimeLengthFactor = 1.25;
+double grid_modelled_cells(const int kd[3], bool open_z);
 double modelled_grid_cost(int order, std::size_t n, const TreeCounts &counts, double pair_weight = 1.0);
 // Largest grid (cells per side) offered at this order: its kernels (periodic_grid.h) and the
 // convolution buffer are each at most 64 MB; 0 above the largest order with a fitted constant.

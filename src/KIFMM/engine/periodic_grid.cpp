@@ -413,7 +413,7 @@ std::shared_ptr<GridKernel> grid_kernel_from_values(const int k[3], int p, const
   }
   g->p = p;
   g->nraw = m2l_nfreq_raw(p);
-  g->nfreq = m2l_nfreq(p);
+  g->nfreq = grid_row_stride(p);
   g->quad = quad;
   (void) V;
   const int n = m2l_grid_n(p), m = 2 * p - 1;

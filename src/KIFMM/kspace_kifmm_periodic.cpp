@@ -162,7 +162,7 @@ void KSpaceKIFMM::periodic_root(kifmm::Options &o) const
 std::string KSpaceKIFMM::grid_cells_text(const kifmm::Options &o) const
 {
   int c[3];
-  kifmm::grid_cells_per_axis(o.periodic_grid, o.root_shape, c, o.periodic_dims == 2);
+  kifmm::grid_cells_per_axis(o.periodic_grid, o.root_shape, c);
   if (c[0] == c[1] && c[1] == c[2] && o.periodic_dims == 3) return fmt::format("{}^3", c[0]);
   return fmt::format("{} x {} x {}", c[0], c[1], c[2]);
 }
@@ -192,7 +192,7 @@ void KSpaceKIFMM::fit_periodic_box(kifmm::Options &o)
   if (o.periodic_grid > 0 && kset.grid > 0) {
     int c[3];
     const bool open_z = o.periodic_dims == 2;
-    kifmm::grid_cells_per_axis(o.periodic_grid, o.root_shape, c, open_z);
+    kifmm::grid_cells_per_axis(o.periodic_grid, o.root_shape, c);
     std::string fit;
     int listed = 0;
     for (int k = 3; k <= kifmm::max_grid_cells_long(o.order, o.root_shape) && listed < 6; ++k)

@@ -157,6 +157,49 @@ TEST(PeriodicBox, GridInRectangularBoxesUpToOneToEight)
   }
 }
 
+TEST(PeriodicBox, GridWithOneOrTwoCellsAcrossAThinSide)
+{
+  // thin sides of 1 cell (the cell's near field holds its own images) or 2 cells (one
+  // neighbour met at two shifts): sources = targets (mutual near field) and separate targets
+  // (one-sided), Laplace and Yukawa, against the Ewald sum
+  struct Case {
+    double shape[3];
+    int k;
+    int cells[3];
+  };
+  const Case cases[] = {{{1.0, 1.0, 0.125}, 8, {8, 8, 1}},
+                        {{1.0, 0.125, 0.125}, 16, {16, 2, 2}},
+                        {{0.25, 1.0, 0.125}, 8, {2, 8, 1}},
+                        {{1.0, 0.125, 0.125}, 8, {8, 1, 1}}};
+  const double c[3] = {0.5, 0.0, -2.0};
+  for (const Case &cs : cases) {
+    int kd[3];
+    kifmm::grid_cells_per_axis(cs.k, cs.shape, kd);
+    for (int d = 0; d < 3; ++d) ASSERT_EQ(kd[d], cs.cells[d]);
+    ASSERT_TRUE(kifmm::grid_fits_cell(8, cs.k, cs.shape)) << cs.k;
+    const Points p = neutral(box_points(1500, 52, c, 2.0, cs.shape));
+    const Points t = box_points(300, 53, c, 2.0, cs.shape);
+    for (const KernelSpec &ker : {KernelSpec{}, KernelSpec{KernelType::Yukawa, 2.0}}) {
+      kifmm::Options o = box_options(8, 40, c, 2.0, cs.shape);
+      o.periodic_grid = cs.k;
+      const BoxErrors e = box_errors(ker, o, p);
+      // one-sided: separate targets
+      const std::size_t n = p.size(), m = t.size();
+      std::vector<double> pot(m), g(3 * m), rp(m), rg(3 * m);
+      kifmm::make_evaluator(ker, o)->evaluate(n, p.xyz.data(), p.q.data(), m, t.xyz.data(), pot.data(), g.data());
+      kifmm::periodic_direct_sum(ker, o.root_center, o.root_half_width, n, p.xyz.data(), p.q.data(), m, t.xyz.data(),
+                                 rp.data(), rg.data(), o.root_shape);
+      const double eg = rel_l2(g, rg), ep = rel_l2(pot, rp);
+      std::printf("  grid %dx%dx%d %s p=8: mutual pot %.2e grad %.2e, one-sided pot %.2e grad %.2e\n", kd[0], kd[1],
+                  kd[2], ker.type == KernelType::Yukawa ? "yukawa" : "laplace", e.pot, e.grad, ep, eg);
+      EXPECT_LT(e.grad, 2e-6);
+      EXPECT_LT(e.pot, 2e-6);
+      EXPECT_LT(eg, 2e-6);
+      EXPECT_LT(ep, 2e-6);
+    }
+  }
+}
+
 TEST(PeriodicBox, NetChargeAndPointsOutsideTheCell)
 {
   const double shape[3] = {0.6, 0.8, 1.0}, c[3] = {0.0, 3.0, -1.0};

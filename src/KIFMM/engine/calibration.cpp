@@ -344,7 +344,7 @@ TreeCounts grid_counts(std::size_t n, const double *xyz, const double center[3],
                        const double *shape, bool open_z)
 {
   int kd[3];
-  grid_cells_per_axis(k, shape, kd, open_z);
+  grid_cells_per_axis(k, shape, kd);
   const int kc = kd[0] * kd[1] * kd[2];
   std::vector<double> occ(kc, 0.0);
   for (std::size_t i = 0; i < n; ++i) occ[grid_cell_index(xyz + 3 * i, center, half_width, shape, kd)] += 1;
@@ -383,7 +383,7 @@ int max_grid_cells(int order)
 {
   const int last = kGridCost[sizeof kGridCost / sizeof kGridCost[0] - 1].order;
   if (order > last || order < 2) return 0;
-  const double per_cell = 16.0 * grid_row_stride(order);    // bytes of kernel (and buffer) per cell
+  const double per_cell = 16.0 * m2l_nfreq(order);    // bytes of kernel (and buffer) per cell
   int k = 3;
   while ((double) (k + 1) * (k + 1) * (k + 1) * per_cell <= 64e6) ++k;
   return k;
@@ -392,7 +392,7 @@ int max_grid_cells(int order)
 // cells of a grid within the memory bound (kernels and convolution buffer at most 64 MB each)
 double grid_memory_cells(int order)
 {
-  return 64e6 / (16.0 * grid_row_stride(std::min(std::max(order, 2), 16)));
+  return 64e6 / (16.0 * m2l_nfreq(std::min(std::max(order, 2), 16)));
 }
 
 int max_grid_cells_long(int order, const double *shape)
@@ -416,7 +416,7 @@ bool grid_fits_cell(int order, int k, const double shape[3], bool open_z)
 {
   if (k < 3 || k > max_grid_cells_long(order, shape)) return false;
   int kd[3];
-  grid_cells_per_axis(k, shape, kd, open_z);
+  grid_cells_per_axis(k, shape, kd);
   if (open_z && (double) kd[0] * kd[1] * 2 * kd[2] > grid_memory_cells(order)) return false;    // zero padding
   return grid_cell_aspect(kd, shape) <= max_cell_aspect * (1 + 1e-12);
 }
@@ -427,7 +427,7 @@ TreeChoice choose_slab_grid(int order, std::size_t n, const double shape[3])
   for (int k = 3; k <= max_grid_cells_long(order, shape); ++k) {
     if (!grid_fits_cell(order, k, shape, true)) continue;
     int kd[3];
-    grid_cells_per_axis(k, shape, kd, true);
+    grid_cells_per_axis(k, shape, kd);
     // uniform counts of the cells (the near field of the z boundary cells counted as inside)
     TreeCounts t;
     const double cells = (double) kd[0] * kd[1] * kd[2], m = (double) n / cells;

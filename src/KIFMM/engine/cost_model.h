@@ -119,7 +119,8 @@ constexpr double kGridPrimeLengthFactor = 1.25;
 double grid_modelled_cells(const int kd[3], bool open_z);
 double modelled_grid_cost(int order, std::size_t n, const TreeCounts &counts, double pair_weight = 1.0);
 // Largest grid (cells per side) offered at this order: its kernels (periodic_grid.h) and the
-// convolution buffer are each at most 64 MB; 0 above the largest order with a fitted constant.
+// convolution buffer are each at most 64 MB (counted without the padding of grid_row_stride, under
+// 1 % at orders >= 4); 0 above the largest order with a fitted constant.
 // Rectangular cells: at most max_grid_cells^3 cells in all.
 int max_grid_cells(int order);
 

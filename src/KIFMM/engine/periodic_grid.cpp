@@ -208,8 +208,9 @@ std::vector<double> grid_kernel_values(const KernelSpec &unit, const int k[3], i
         double pm[3] = {acc[1].imag(), acc[2].imag(), acc[3].imag()};    // P_a
         const double r[3] = {u[0][x], u[1][y], u[2][z]};
         const int D[3] = {rep[0][x], rep[1][y], rep[2][z]};
-        // images within the real-space cutoff per axis, and the excluded ones (n = 0 there:
-        // |D| <= k/2 and k >= 3 make |D + k n| <= 1 impossible for n != 0)
+        // images within the real-space cutoff per axis, and the excluded ones (|D + k n| <= 1:
+        // n = 0 when k >= 3; with 2 cells along an axis the class D = 1 has two (n = 0, -1), with
+        // 1 cell three (n = -1, 0, 1); images() is at least 1)
         std::vector<int> cand[3];
         for (int c = 0; c < 3; ++c) {
           const int Q = s.images(c, std::fabs(r[c]));
@@ -477,8 +478,7 @@ std::shared_ptr<GridKernel> grid_kernel_from_values(const int k[3], int p, const
 std::shared_ptr<GridKernel> compute_grid_kernel(const KernelSpec &unit, const int k[3], int p, const double cs[3],
                                                 bool slab)
 {
-  if (std::min(k[0], k[1]) < 3 || k[2] < (slab ? 1 : 3))
-    throw std::invalid_argument("kifmm: a periodic grid needs at least 3 cells per periodic side");
+  if (std::min(k[0], std::min(k[1], k[2])) < 1) throw std::invalid_argument("kifmm: a periodic grid needs cells");
   if (slab && unit.type != KernelType::Laplace)
     throw std::invalid_argument("kifmm: the slab (periodic_dims 2) is for the Laplace kernel");
   double V = 1.0;
@@ -526,8 +526,8 @@ std::shared_ptr<const GridMomentKernels> periodic_grid_moment_kernels(const Kern
   auto it = cache.find(key);
   if (it != cache.end()) return it->second;
   if (cache.size() > 8) cache.clear();
-  if (std::min(cells[0], cells[1]) < 3 || cells[2] < (slab ? 1 : 3))
-    throw std::invalid_argument("kifmm: a periodic grid needs at least 3 cells per periodic side");
+  if (std::min(cells[0], std::min(cells[1], cells[2])) < 1)
+    throw std::invalid_argument("kifmm: a periodic grid needs cells");
   std::vector<double> mom;
   if (slab) slab_kernel_values(cells, p, cs, &mom);
   else grid_kernel_values(unit, cells, p, cs, &mom);

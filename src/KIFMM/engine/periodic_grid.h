@@ -4,8 +4,9 @@
 // choice for small N (about 1e3 .. 3e4 atoms, see cost_model.h): the octree's 4 or 8 leaves
 // per side leave either too many atoms per leaf (near field) or too many M2L translations;
 // 5, 6, 7 ... per side fill the gap. Laplace and Yukawa.
-//   near field : every cell with itself and its 26 neighbours (images included; k >= 3 makes
-//                them 26 distinct cells), pair by pair for both sides when sources = targets;
+//   near field : every cell with itself and its 26 neighbours (images included: with 1 or 2
+//                cells along an axis, its own images or one cell met at two shifts), pair by
+//                pair for both sides when sources = targets;
 //   far field  : ALL other images of all cells through one convolution. For a target cell t
 //                and a source cell s, every image s + k n that is not adjacent to t
 //                (|s + k n - t|_inf >= 2) acts through the ordinary M2L (its equivalent

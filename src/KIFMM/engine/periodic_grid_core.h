@@ -11,6 +11,7 @@
 #include "periodic_grid.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <type_traits>
@@ -117,7 +118,7 @@ void FmmEvaluator<K>::evaluate_grid_distributed(Communicator &comm, std::size_t 
 template <class K> int FmmEvaluator<K>::grid_cell_of(const double *x) const
 {
   int cells[3];
-  grid_cells_per_axis(opt_.periodic_grid, opt_.root_shape, cells, opt_.periodic_dims == 2);
+  grid_cells_per_axis(opt_.periodic_grid, opt_.root_shape, cells);
   return grid_cell_index(x, opt_.root_center, opt_.root_half_width, opt_.root_shape, cells);
 }
 
@@ -126,7 +127,7 @@ template <class K> int FmmEvaluator<K>::grid_neighbour(int b, int dx, int dy, in
 {
   int cells[3];
   const bool slab = opt_.periodic_dims == 2;
-  grid_cells_per_axis(opt_.periodic_grid, opt_.root_shape, cells, slab);
+  grid_cells_per_axis(opt_.periodic_grid, opt_.root_shape, cells);
   const int c = grid_neighbour_cell(b, cells, dx, dy, dz, sh);
   return slab && sh[2] != 0 ? -1 : c;
 }
@@ -175,7 +176,7 @@ template <class K> typename FmmEvaluator<K>::GridGeometry FmmEvaluator<K>::grid_
   GridGeometry g;
   if (opt_.periodic_grid < 3) throw std::invalid_argument("kifmm: Options::periodic_grid needs at least 3 cells per side");
   g.slab = opt_.periodic_dims == 2;
-  grid_cells_per_axis(opt_.periodic_grid, opt_.root_shape, g.k, g.slab);
+  grid_cells_per_axis(opt_.periodic_grid, opt_.root_shape, g.k);
   g.kc = g.k[0] * g.k[1] * g.k[2];
   g.H = opt_.root_half_width;
   g.h = g.H * grid_cell_shape(g.k, opt_.root_shape, g.cs);
@@ -375,12 +376,17 @@ template <class K> void FmmEvaluator<K>::grid_l2p(const GridGeometry &g, bool wa
 }
 
 // Near field, sources = targets: each cell with itself and its 26 neighbours (images: shift in
-// {-1,0,1}^3), pair by pair for both cells (13 of the 26 offsets). Returns the coincident pairs.
+// {-1,0,1}^3), pair by pair for both cells (13 of the 26 offsets). With 2 cells along an axis
+// one neighbour cell is met at two shifts (two pairs); with 1 cell along an axis the cell's
+// neighbours include its own images: those go with the cell's self task, one-sided at +shift
+// and -shift (the pair evaluation would write both sides of one cell at once). Returns the
+// coincident pairs.
 template <class K> std::size_t FmmEvaluator<K>::grid_near_mutual(const GridGeometry &g, bool want_pot)
 {
   const std::vector<int> &sb = grid_src_begin_;
   std::vector<int> self;
   std::vector<MutualPair> pairs;
+  std::vector<std::array<signed char, 3>> self_images;    // the same for every cell
   for (int b = 0; b < g.kc; ++b) {
     if (sb[b + 1] == sb[b]) continue;
     self.push_back(b);
@@ -388,7 +394,11 @@ template <class K> std::size_t FmmEvaluator<K>::grid_near_mutual(const GridGeome
       MutualPair pr;
       pr.a = b;
       pr.b = grid_neighbour(b, o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, pr.shift);
-      if (pr.b >= 0 && sb[pr.b + 1] > sb[pr.b]) pairs.push_back(pr);
+      if (pr.b == b) {
+        if (self.size() == 1) self_images.push_back({pr.shift[0], pr.shift[1], pr.shift[2]});
+      } else if (pr.b >= 0 && sb[pr.b + 1] > sb[pr.b]) {
+        pairs.push_back(pr);
+      }
     }
   }
   stats_.mutual_pairs = pairs.size();
@@ -399,6 +409,17 @@ template <class K> std::size_t FmmEvaluator<K>::grid_near_mutual(const GridGeome
     std::size_t z0 = 0;
     if (want_pot) p2p_mutual<K, true>(k_, self_pair, sa, sbb, d, &z0);
     else p2p_mutual<K, false>(k_, self_pair, sa, sbb, d, &z0);
+    if (self_pair && !self_images.empty()) {
+      const std::size_t t = sb[a], n = sb[a + 1] - sb[a];
+      std::vector<double> x, y, z;
+      for (const auto &img : self_images)
+        for (int sign : {1, -1}) {
+          const signed char s2[3] = {(signed char) (sign * img[0]), (signed char) (sign * img[1]),
+                                     (signed char) (sign * img[2])};
+          grid_shifted_targets(g, t, n, s2, x, y, z);
+          p2p_pg<K, true>(k_, want_pot, {n, x.data(), y.data(), z.data()}, source_range(t, n), result_at(t), &z0);
+        }
+    }
     return z0;
   });
 }

@@ -227,13 +227,12 @@ TreeChoice choose_slab_grid(int order, std::size_t n, const double shape[3]);
 int max_grid_cells_long(int order, const double *shape);
 
 // Cells per axis of the grid with k cells along the longest axis of a periodic cell of this
-// shape (RootBox::shape, largest 1; null or a cube: k k k): round(k shape[d]), at least 3.
-// open_z (a slab, Options::periodic_dims = 2): at least 1 cell along z.
-inline void grid_cells_per_axis(int k, const double *shape, int cells[3], bool open_z = false)
+// shape (RootBox::shape, largest 1; null or a cube: k k k): round(k shape[d]), at least 1
+// (a thin side of 1 or 2 cells: a cell's near field then holds its own images or one cell
+// twice, periodic_grid.h).
+inline void grid_cells_per_axis(int k, const double *shape, int cells[3])
 {
-  for (int d = 0; d < 3; ++d)
-    cells[d] = shape ? std::max(d == 2 && open_z ? 1 : 3, (int) std::lround(k * shape[d])) : k;
-  if (!shape && open_z) cells[2] = k;
+  for (int d = 0; d < 3; ++d) cells[d] = shape ? std::max(1, (int) std::lround(k * shape[d])) : k;
 }
 // Half-widths of one cell (largest 1) and the largest one's length in units of the periodic
 // cell's half-width H: cell d has half-width H shape[d] / cells[d].

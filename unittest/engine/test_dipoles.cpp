@@ -310,8 +310,8 @@ Field ewald_dipoles(const Dipoles &s, const double L[3])
   return f;
 }
 
-// periodic boundaries, octree and single-level grid, a cube and a rectangular box: against the
-// Ewald sum (tin-foil; a net charge: its neutralizing background)
+// periodic boundaries, octree and single-level grid, a cube and rectangular boxes (also 1 cell
+// across thin sides): against the Ewald sum (tin-foil; a net charge: its neutralizing background)
 TEST(Dipoles, PeriodicEqualsEwald)
 {
   struct Box {
@@ -322,7 +322,8 @@ TEST(Dipoles, PeriodicEqualsEwald)
   };
   for (const Box &b : {Box{"cube, octree", {1, 1, 1}, 0, true}, Box{"cube, grid", {1, 1, 1}, 4, true},
                        Box{"2x1x1, grid", {1, 0.5, 0.5}, 6, true}, Box{"charged, octree", {1, 1, 1}, 0, false},
-                       Box{"charged, grid", {1, 1, 1}, 4, false}}) {
+                       Box{"charged, grid", {1, 1, 1}, 4, false}, Box{"8x8x1, grid", {1, 1, 0.125}, 8, true},
+                       Box{"8x1x1, grid", {1, 0.125, 0.125}, 8, true}}) {
     Points pts = uniform_cube(250, 61);
     for (std::size_t i = 0; i < pts.size(); ++i)
       for (int d = 0; d < 3; ++d) pts.xyz[3 * i + d] *= b.shape[d];
@@ -403,18 +404,18 @@ double minus_strain_derivative(const Dipoles &s, const double L[3], int a, bool 
 // Ewald energy under a stretch of one axis (positions scaled, moments fixed)
 TEST(Dipoles, PeriodicVirialIsTheStrainDerivative)
 {
-  for (const double sy : {1.0, 0.5}) {
+  for (const double sy : {1.0, 0.5, 0.125}) {
     Points pts = uniform_cube(120, 71);
     const double shape[3] = {1.0, sy, 1.0};
     for (std::size_t i = 0; i < pts.size(); ++i) pts.xyz[3 * i + 1] *= sy;
     const Dipoles s = random_dipoles(neutral(pts), 72, true);
-    kifmm::Options o = periodic_options(12, 32, 1.0, nullptr, sy == 1.0 ? 4 : 6);
+    kifmm::Options o = periodic_options(12, 32, 1.0, nullptr, sy == 1.0 ? 4 : sy == 0.5 ? 6 : 8);    // 0.125: 8 x 1 x 8
     for (int d = 0; d < 3; ++d) o.root_shape[d] = shape[d];
     const std::vector<double> W = dipole_virial_total(o, s);
     const double L[3] = {2.0, 2.0 * sy, 2.0};
     for (int a = 0; a < 3; ++a) {
       const double w = minus_strain_derivative(s, L, a, true, ewald_energy);
-      std::printf("shape y %.1f: W_%d%d %.10f, -dU/de %.10f\n", sy, a, a, W[a], w);
+      std::printf("shape y %.3f: W_%d%d %.10f, -dU/de %.10f\n", sy, a, a, W[a], w);
       EXPECT_NEAR(W[a], w, 1e-8 * (std::fabs(W[0]) + std::fabs(W[1]) + std::fabs(W[2]))) << "axis " << a;
     }
   }

@@ -520,7 +520,8 @@ TEST_F(Periodic, GravityWithoutJeansIsAnError)
 // ---------------------------------------------------------------- orthogonal boxes
 
 // rectangular boxes: a nearly cubic one (the octree, every cell of the box's shape) and boxes
-// of aspect ratio 1.3 and 4 (the single-level grid of nearly cubic cells), equal to ewald
+// of aspect ratio 1.3, 4 and 8 (the single-level grid of nearly cubic cells; 8: 1 and 2 cells
+// across the thin sides), equal to ewald
 TEST_F(Periodic, RectangularBoxesEqualEwald)
 {
   struct Box {
@@ -529,7 +530,9 @@ TEST_F(Periodic, RectangularBoxesEqualEwald)
   };
   const Box boxes[] = {{0.99, 1.03, "order 14 leaf 40", "leaf size = 40"},
                        {1.3, 1.0, "order 12", "single-level grid of "},
-                       {0.25, 1.0, "order 12", "single-level grid of "}};
+                       {0.25, 1.0, "order 12", "single-level grid of "},
+                       {1.0, 0.125, "order 12 grid 8", "single-level grid of 8 x 8 x 1 "},
+                       {0.125, 0.125, "order 12 grid 16", "single-level grid of 16 x 2 x 2 "}};
   for (const Box &b : boxes) {
     create();    // a new instance per box
     load(uniform_cube(600, 54));
@@ -744,7 +747,8 @@ TEST_F(Periodic, GridValueIsChecked)
 
 // The virial tensor (pxx .. pyz, fix npt aniso, compute stress/atom) of p p p: equal to ewald's
 // (k-space part + the real-space pair virial) in a cube (octree for the forces, a grid for the
-// virial), a rectangular box (grid) and the anisotropic capacitor layers; per-atom virials sum
+// virial), rectangular boxes (grids; a flat one of 8 x 8 x 1 cells) and the anisotropic
+// capacitor layers; per-atom virials sum
 // to it; the trace is the energy.
 TEST_F(Periodic, PressureTensorEqualsEwald)
 {
@@ -753,7 +757,10 @@ TEST_F(Periodic, PressureTensorEqualsEwald)
     bool layers;
     std::string modify;
   };
-  const Box boxes[] = {{1.0, 1.0, false, "order 12 leaf 40"}, {1.3, 0.9, false, "order 12"}, {1.0, 1.0, true, "order 12 leaf 40"}};
+  const Box boxes[] = {{1.0, 1.0, false, "order 12 leaf 40"},
+                       {1.3, 0.9, false, "order 12"},
+                       {1.0, 1.0, true, "order 12 leaf 40"},
+                       {1.0, 0.125, false, "order 12 grid 8"}};
   for (const Box &b : boxes) {
     create();
     Configuration c = uniform_cube(500, 71);

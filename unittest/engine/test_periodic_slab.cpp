@@ -143,9 +143,10 @@ TEST(PeriodicSlab, GridMatchesTheDoublyPeriodicSum)
     int k;
     double shift;
   };
-  // a flat slab, a tall one, a rectangular floor; neutral and with a net charge
-  const Case cases[] = {{{1.0, 1.0, 0.5}, 6, 0.0}, {{0.5, 0.5, 1.0}, 6, 0.0}, {{1.0, 0.6, 0.4}, 5, 0.0},
-                        {{1.0, 1.0, 0.5}, 6, 0.3}};
+  // a flat slab, a tall one, a rectangular floor; neutral and with a net charge; columns of 2 x 2
+  // and 2 x 1 cells across (one neighbour met at two shifts, a cell's own images)
+  const Case cases[] = {{{1.0, 1.0, 0.5}, 6, 0.0},   {{0.5, 0.5, 1.0}, 6, 0.0},    {{1.0, 0.6, 0.4}, 5, 0.0},
+                        {{1.0, 1.0, 0.5}, 6, 0.3},   {{0.25, 0.25, 1.0}, 8, 0.0}, {{0.25, 0.125, 1.0}, 8, 0.0}};
   const double c[3] = {0.5, -1.0, 2.0};
   for (const Case &cs : cases) {
     Points p = slab_points(400, 63, c, 1.5, cs.shape, cs.shift);

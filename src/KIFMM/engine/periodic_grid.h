@@ -40,7 +40,8 @@ namespace kifmm {
 // lattice rounded up to an odd number of 16-frequency blocks. The DFT over the cells reads one
 // block of every cell, nfreq apart; an even number of blocks makes that stride a multiple of
 // 512 bytes (at p = 8, 9 x 4096), so the cells' blocks fall into a few cache sets and evict
-// each other (the convolution over 24 x 3 x 3 cells took 3x as long as over 25 x 3 x 3).
+// each other (with such a stride the convolution over 24 x 3 x 3 cells takes 3x as long as over
+// 25 x 3 x 3).
 inline int grid_row_stride(int p)
 {
   const int blocks = (m2l_nfreq_raw(p) + 15) / 16;

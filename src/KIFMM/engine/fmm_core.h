@@ -315,6 +315,7 @@ template <class K> class FmmEvaluator : public Evaluator {
   };
   static constexpr int kGridBatch = 64;            // cells per batched operator application
   GridGeometry grid_geometry() const;
+  KernelSpec grid_unit_kernel(const GridGeometry &g) const;    // the grid tables' kernel (unit cell)
   void grid_center(const GridGeometry &g, int b, double ctr[3]) const;
   void grid_reduce(Communicator *comm, double *v, std::size_t m);    // sum over ranks (comm null: none)
   void grid_operators(const GridGeometry &g);

@@ -187,6 +187,15 @@ template <class K> typename FmmEvaluator<K>::GridGeometry FmmEvaluator<K>::grid_
   return g;
 }
 
+// Laplace, or Yukawa with kappa * H: the kernel of the unit periodic cell (largest half-width 1)
+// whose lattice sums the grid's kernel tables hold
+template <class K> KernelSpec FmmEvaluator<K>::grid_unit_kernel(const GridGeometry &g) const
+{
+  if constexpr (std::is_same_v<K, YukawaKernel>) return KernelSpec{KernelType::Yukawa, k_.kappa * g.H};
+  (void) g;
+  return KernelSpec{};
+}
+
 template <class K> void FmmEvaluator<K>::grid_center(const GridGeometry &g, int b, double ctr[3]) const
 {
   const int a[3] = {b / (g.k[1] * g.k[2]), (b / g.k[2]) % g.k[1], b % g.k[2]};
@@ -266,9 +275,7 @@ template <class K> void FmmEvaluator<K>::grid_operators(const GridGeometry &g)
   scale_.assign(1, s);
   if (!fft_ || fft_->p() != p_) fft_ = std::make_unique<M2LTransform>(p_);
   const double tg = omp_get_wtime();
-  KernelSpec unit;    // Laplace, or Yukawa with kappa * H (unit cell)
-  if constexpr (std::is_same_v<K, YukawaKernel>) unit = KernelSpec{KernelType::Yukawa, k_.kappa * g.H};
-  grid_kernel_ = periodic_grid_kernel(unit, g.k, p_, g.cs, g.slab);
+  grid_kernel_ = periodic_grid_kernel(grid_unit_kernel(g), g.k, p_, g.cs, g.slab);
   stats_.t_precompute = t_setup + (omp_get_wtime() - tg);
   stats_.operator_bytes = ops_[0]->bytes() + grid_kernel_->bytes();
 }

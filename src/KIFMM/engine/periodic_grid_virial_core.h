@@ -97,9 +97,7 @@ template <class K> void FmmEvaluator<K>::grid_offset_field(Communicator *comm, d
     const std::size_t nt = tx_.size();
     const int kc = g.kc;
     // ---- far part: three convolutions of the upward densities (kept from the evaluation)
-    KernelSpec unit;    // Laplace, or Yukawa with kappa * H (unit cell), as grid_operators
-    if constexpr (std::is_same_v<K, YukawaKernel>) unit = KernelSpec{KernelType::Yukawa, k_.kappa * g.H};
-    const auto mk = periodic_grid_moment_kernels(unit, g.k, p_, g.cs, g.slab);
+    const auto mk = periodic_grid_moment_kernels(grid_unit_kernel(g), g.k, p_, g.cs, g.slab);
     std::vector<double> occupied(kc);
     for (int b = 0; b < kc; ++b) occupied[b] = own_end[b] - sb[b];
     grid_reduce(comm, occupied.data(), kc);

@@ -322,7 +322,9 @@ void FmmEvaluator<K>::grid_m2l(const GridGeometry &g, const std::vector<double> 
   std::complex<double> *z = grid_spectra_.get((std::size_t) nf * gk.slots());
   if (gk.slots() != (std::size_t) kc)    // a slab's zero padding along z
     std::fill(z, z + (std::size_t) nf * gk.slots(), std::complex<double>(0.0));
-  const int nblk = nf / 16;
+  // the frequency blocks that hold data (the last block of a row, grid_row_stride's padding, is
+  // neither written nor read)
+  const int nused = fft_->nfreq(), nblk = nused / 16;
 #pragma omp parallel
   {
     M2LTransform::Workspace ws(*fft_);
@@ -331,11 +333,11 @@ void FmmEvaluator<K>::grid_m2l(const GridGeometry &g, const std::vector<double> 
     for (int b = 0; b < kc; ++b) {
       std::complex<double> *zb = z + gk.slot(b) * nf;
       if (occupied[b] == 0) {
-        std::fill(zb, zb + nf, std::complex<double>(0.0));
+        std::fill(zb, zb + nused, std::complex<double>(0.0));
         continue;
       }
       fft_->forward(up(b), chunk.data(), 32, ws);
-      for (int f = 0; f < nf; ++f)
+      for (int f = 0; f < nused; ++f)
         zb[f] = std::complex<double>(chunk[(f / 16) * 32 + f % 16], chunk[(f / 16) * 32 + 16 + f % 16]);
     }
 #pragma omp for schedule(dynamic, 1)
@@ -343,7 +345,7 @@ void FmmEvaluator<K>::grid_m2l(const GridGeometry &g, const std::vector<double> 
 #pragma omp for schedule(static)
     for (int b = 0; b < kc; ++b) {
       if (tb[b + 1] == tb[b]) continue;
-      for (int f = 0; f < nf; ++f) {
+      for (int f = 0; f < nused; ++f) {
         const std::complex<double> v = z[gk.slot(b) * nf + f];
         chunk[(f / 16) * 32 + f % 16] = v.real();
         chunk[(f / 16) * 32 + 16 + f % 16] = v.imag();
@@ -393,7 +395,11 @@ template <class K> std::size_t FmmEvaluator<K>::grid_near_mutual(const GridGeome
   const std::vector<int> &sb = grid_src_begin_;
   std::vector<int> self;
   std::vector<MutualPair> pairs;
-  std::vector<std::array<signed char, 3>> self_images;    // the same for every cell
+  std::vector<std::array<signed char, 3>> self_images;    // the same for every cell: those of cell 0
+  for (int o = 14; o < 27; ++o) {
+    signed char sh[3];
+    if (grid_neighbour(0, o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, sh) == 0) self_images.push_back({sh[0], sh[1], sh[2]});
+  }
   for (int b = 0; b < g.kc; ++b) {
     if (sb[b + 1] == sb[b]) continue;
     self.push_back(b);
@@ -401,11 +407,7 @@ template <class K> std::size_t FmmEvaluator<K>::grid_near_mutual(const GridGeome
       MutualPair pr;
       pr.a = b;
       pr.b = grid_neighbour(b, o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, pr.shift);
-      if (pr.b == b) {
-        if (self.size() == 1) self_images.push_back({pr.shift[0], pr.shift[1], pr.shift[2]});
-      } else if (pr.b >= 0 && sb[pr.b + 1] > sb[pr.b]) {
-        pairs.push_back(pr);
-      }
+      if (pr.b >= 0 && pr.b != b && sb[pr.b + 1] > sb[pr.b]) pairs.push_back(pr);
     }
   }
   stats_.mutual_pairs = pairs.size();

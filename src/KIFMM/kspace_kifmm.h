@@ -72,12 +72,6 @@ class KSpaceKIFMM : public KSpace {
   std::vector<double> moment, hess;
   void dipole_init();
   bool is_point(int i) const;    // a source and target of the sum
-  std::vector<double> gathered_xyz, gathered_q, gathered_mu;    // several ranks: the points of all
-  struct DipoleSources {
-    std::size_t n;
-    const double *xyz, *q, *mu;
-  };
-  DipoleSources dipole_sources() const;
   void evaluate_dipole_points(bool want_potential, double &comm_time, std::size_t &nsrc);
   // force and torque of point k (torque zero without dipoles), its energy
   void point_force(std::size_t k, double prefactor, double f[3], double t[3]) const;
@@ -88,7 +82,6 @@ class KSpaceKIFMM : public KSpace {
   class KIFMMPolarization *polarization = nullptr;
   void find_polarization();
   void polarize_points();
-  std::vector<double> gathered_pol_xyz, gathered_pol_mu;    // several ranks: the polarizable points of all
   // more than one rank: distributed evaluation over this communicator (world), open or
   // periodic boundaries; one rank uses the serial evaluate() (with its mutual near field)
   std::unique_ptr<kifmm::Communicator> kcomm;

@@ -7,9 +7,10 @@
 //   tau_i = -qqrd2e mu_i x g_i                  (mu x E)
 //   U     = qqrd2e / 2 sum_i (q_i phi_i + mu_i . g_i)
 // as pair lj/cut/dipole/cut sums them with a cutoff. Open boundaries, and p p p with kernel
-// coulomb (tin-foil, as ewald/disp sums dipoles); on several ranks every rank evaluates its own
-// atoms against the sources of all ranks (gathered). The measured error covers forces and
-// torques (sampled against the exact sum; periodic: an Ewald sum).
+// coulomb (tin-foil, as ewald/disp sums dipoles); on several ranks the evaluation is distributed
+// (each rank passes its own atoms: evaluate_dipoles_distributed), as are the virial and the
+// error check; no rank gathers the atoms of all others. The measured error covers forces and torques (sampled against the exact sum;
+// periodic: an Ewald sum).
 // Rigid clumps (fix clump/rigid): the pairs of charges inside a clump are left out as without
 // dipoles (their part of the gradient and potential, body_pairs, comes off q_i's force and
 // energy only); the induced dipoles of pebbles (fix kifmm/polarize) see every field, that of
@@ -102,15 +103,6 @@ bool KSpaceKIFMM::is_point(int i) const
   return dipoles && (has_moment(atom->mu[i]) || (polarization && polarization->polarizable(i)));
 }
 
-// The sources of a dipole evaluation: this rank's points on one rank; on several, the points of
-// all ranks, gathered once per evaluation (evaluate_dipole_points) and used again by the virial
-// and the error check of the same step.
-KSpaceKIFMM::DipoleSources KSpaceKIFMM::dipole_sources() const
-{
-  if (distributed()) return {gathered_q.size(), gathered_xyz.data(), gathered_q.data(), gathered_mu.data()};
-  return {strength.size(), xyz.data(), strength.data(), moment.data()};
-}
-
 void KSpaceKIFMM::evaluate_dipole_points(bool want_potential, double &comm_time, std::size_t &nsrc)
 {
   const std::size_t n = index.size();
@@ -119,19 +111,12 @@ void KSpaceKIFMM::evaluate_dipole_points(bool want_potential, double &comm_time,
   hess.assign(6 * n, 0.0);
   comm_time = 0;
   if (distributed()) {
-    const double t0 = MPI_Wtime();
-    std::vector<int> counts;
-    kcomm->allgatherv(xyz, gathered_xyz, counts);
-    kcomm->allgatherv(strength, gathered_q, counts);
-    kcomm->allgatherv(moment, gathered_mu, counts);
-    comm_time = MPI_Wtime() - t0;
-    nsrc = gathered_q.size();
-    check_memory(nsrc);
-    engine->evaluate_dipoles(nsrc, gathered_xyz.data(), gathered_q.data(), gathered_mu.data(), n, xyz.data(),
-                             want_potential ? pot.data() : nullptr, grad.data(), hess.data());
-    unsigned long long mine = engine->stats().n_sources, all = 0;
-    MPI_Allreduce(&mine, &all, 1, MPI_UNSIGNED_LONG_LONG, MPI_MAX, world);
-    nsrc = all;
+    // each rank passes its own atoms (collective; ghosts are exchanged inside)
+    check_memory(n);
+    engine->evaluate_dipoles_distributed(*kcomm, n, xyz.data(), strength.data(), moment.data(),
+                                         want_potential ? pot.data() : nullptr, grad.data(), hess.data());
+    comm_time = engine->stats().t_comm;
+    nsrc = engine->stats().n_sources;
   } else {
     nsrc = strength.size();
     check_memory(nsrc);
@@ -177,17 +162,21 @@ void KSpaceKIFMM::dipole_virial(double cf, bool global, bool peratom)
   if (!global && !peratom) return;
   const std::size_t n = index.size();
   std::vector<double> w(6 * n);
-  const DipoleSources s = dipole_sources();
-  if (s.n > 0) {
-    if (periodic) {
-      kifmm::periodic_dipole_point_virial(virial_evaluator(), s.n, s.xyz, s.q, s.mu, n, xyz.data(), strength.data(),
-                                          moment.data(), grad.data(), hess.data(), cf, w.data());
-    } else {
-      const double center[3] = {0.5 * (domain->boxlo[0] + domain->boxhi[0]), 0.5 * (domain->boxlo[1] + domain->boxhi[1]),
-                                0.5 * (domain->boxlo[2] + domain->boxhi[2])};
-      kifmm::dipole_point_virial(*engine, s.n, s.xyz, s.q, s.mu, n, xyz.data(), strength.data(), moment.data(),
-                                 grad.data(), hess.data(), cf, w.data(), center);
-    }
+  const double center[3] = {0.5 * (domain->boxlo[0] + domain->boxhi[0]), 0.5 * (domain->boxlo[1] + domain->boxhi[1]),
+                            0.5 * (domain->boxlo[2] + domain->boxhi[2])};
+  const double *x = xyz.data(), *q = strength.data(), *mu = moment.data();
+  if (distributed()) {    // every rank passes its own points (collective)
+    if (periodic)
+      kifmm::periodic_dipole_point_virial(virial_evaluator(), *kcomm, n, x, q, mu, grad.data(), hess.data(), cf,
+                                          w.data());
+    else
+      kifmm::dipole_point_virial(*engine, *kcomm, n, x, q, mu, grad.data(), hess.data(), cf, w.data(), center);
+  } else if (n > 0) {
+    if (periodic)
+      kifmm::periodic_dipole_point_virial(virial_evaluator(), n, x, q, mu, n, x, q, mu, grad.data(), hess.data(), cf,
+                                          w.data());
+    else
+      kifmm::dipole_point_virial(*engine, n, x, q, mu, n, x, q, mu, grad.data(), hess.data(), cf, w.data(), center);
   }
   add_body_pair_virial(cf, nullptr, w.data());    // grad has all pairs: no offset term
   store_point_virial(w, global, peratom);
@@ -197,7 +186,6 @@ void KSpaceKIFMM::dipole_virial(double cf, bool global, bool peratom)
 KSpaceKIFMM::MeasuredError KSpaceKIFMM::measure_dipole_error(int nsamples)
 {
   const std::size_t n = index.size();
-  const DipoleSources src = dipole_sources();
   bigint nmine = (bigint) n, ntotal = 0;
   MPI_Allreduce(&nmine, &ntotal, 1, MPI_LMP_BIGINT, MPI_SUM, world);
   const double nall = (double) ntotal;
@@ -211,7 +199,9 @@ KSpaceKIFMM::MeasuredError KSpaceKIFMM::measure_dipole_error(int nsamples)
   std::vector<double> txyz(3 * m), g(3 * m), h(6 * m);
   for (std::size_t s = 0; s < m; ++s)
     for (int d = 0; d < 3; ++d) txyz[3 * s + d] = xyz[3 * sample[s] + d];
-  kifmm::exact_dipole_field(*engine, src.n, src.xyz, src.q, src.mu, m, txyz.data(), g.data(), h.data());
+  // (several ranks: every rank sums its own sources at the samples of all ranks)
+  kifmm::exact_dipole_field(*engine, distributed() ? kcomm.get() : nullptr, n, xyz.data(), strength.data(),
+                            moment.data(), m, txyz.data(), g.data(), h.data());
   // sums: force diff2, ref2, all evaluated force2; torque the same
   double sums[6] = {0, 0, 0, 0, 0, 0}, tot[6];
   double f[3], t[3], fe[3], te[3];

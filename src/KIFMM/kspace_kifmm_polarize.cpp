@@ -7,8 +7,8 @@
 // field -grad phi of the induced dipoles), by kifmm::solve_induced_dipoles started from the
 // dipoles the atoms carry (the last step's), extrapolated from the step before by the fix. The
 // result goes into atom->mu and the moments of the evaluation that follows, which gives the
-// forces q E + (mu . grad) E, torques and energy of the converged dipoles. Several ranks: the
-// sources of all ranks are gathered (as for dipoles).
+// forces q E + (mu . grad) E, torques and energy of the converged dipoles. Several ranks: every
+// field evaluation is distributed (each rank passes its own points).
 #include "kspace_kifmm.h"
 
 #include "kifmm_polarization.h"
@@ -73,14 +73,12 @@ void KSpaceKIFMM::polarize_points()
     mine = strength[k] != 0.0 || moment[3 * k] != 0.0 || moment[3 * k + 1] != 0.0 || moment[3 * k + 2] != 0.0;
   MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_MAX, world);
   if (any) {
-    if (distributed()) {
-      std::vector<int> counts;
-      kcomm->allgatherv(xyz, gathered_xyz, counts);
-      kcomm->allgatherv(strength, gathered_q, counts);
-      kcomm->allgatherv(moment, gathered_mu, counts);
-      if (m > 0)
-        engine->evaluate_dipoles(gathered_q.size(), gathered_xyz.data(), gathered_q.data(), gathered_mu.data(), m,
-                                 pxyz.data(), nullptr, g.data(), nullptr);
+    if (distributed()) {    // at all own points, kept at the polarizable ones
+      std::vector<double> gall(3 * n);
+      engine->evaluate_dipoles_distributed(*kcomm, n, xyz.data(), strength.data(), moment.data(), nullptr,
+                                           gall.data(), nullptr);
+      for (std::size_t s = 0; s < m; ++s)
+        for (int d = 0; d < 3; ++d) g[3 * s + d] = gall[3 * pol[s] + d];
     } else if (m > 0) {
       engine->evaluate_dipoles(n, xyz.data(), strength.data(), moment.data(), m, pxyz.data(), nullptr, g.data(),
                                nullptr);
@@ -88,16 +86,10 @@ void KSpaceKIFMM::polarize_points()
     for (std::size_t q = 0; q < 3 * m; ++q) e0[q] -= g[q];
   }
 
-  // the field of the induced dipoles (one process: sources = targets, the mutual near field)
-  std::vector<int> counts;
-  if (distributed()) kcomm->allgatherv(pxyz, gathered_pol_xyz, counts);
+  // the field of the induced dipoles (sources = targets: the mutual near field)
   auto field = [&](const double *dip, double *e) {
     if (distributed()) {
-      std::vector<double> local(dip, dip + 3 * m);
-      kcomm->allgatherv(local, gathered_pol_mu, counts);
-      if (m > 0)
-        engine->evaluate_dipoles(gathered_pol_mu.size() / 3, gathered_pol_xyz.data(), nullptr,
-                                 gathered_pol_mu.data(), m, pxyz.data(), nullptr, g.data(), nullptr);
+      engine->evaluate_dipoles_distributed(*kcomm, m, pxyz.data(), nullptr, dip, nullptr, g.data(), nullptr);
     } else if (m > 0) {
       engine->evaluate_dipoles(m, pxyz.data(), nullptr, dip, m, pxyz.data(), nullptr, g.data(), nullptr);
     }

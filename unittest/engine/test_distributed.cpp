@@ -15,8 +15,10 @@
 #include <mpi.h>
 
 #include <algorithm>
+#include <cmath>
 #include <functional>
 #include <random>
+#include <string>
 
 using namespace kifmm_test;
 
@@ -539,4 +541,201 @@ TEST(Distributed, DiagnosticsEqualSerial)
   MPI_Allreduce(MPI_IN_PLACE, e, 2, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
   EXPECT_LT(e[0], 1e-11);
   EXPECT_LT(e[1], 1e-10);
+}
+
+// ---- point dipoles (evaluate_dipoles_distributed)
+
+namespace {
+
+// moments of about a third of the points (some of them without a charge), the rest charges only
+std::vector<double> some_moments(Points &p, unsigned seed)
+{
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<double> mu(3 * p.size(), 0.0);
+  const double scale = 1.0 / std::cbrt((double) p.size());    // about a charge's field at the spacing
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (i % 3 == 0)
+      for (int d = 0; d < 3; ++d) mu[3 * i + d] = scale * u(rng);
+    if (i % 6 == 0) p.q[i] = 0.0;    // a dipole without a charge
+    if (i % 17 == 5) p.q[i] = 0.0;   // a point of neither (a target only)
+  }
+  return mu;
+}
+
+struct DipoleResult {
+  double pot = 0, grad = 0, hess = 0;    // max abs difference / max abs serial value, all ranks
+};
+
+// the distributed pot, grad and hess of charges and dipoles (q_null: no charges) against the
+// serial evaluate_dipoles of all points with the same options
+template <class K>
+DipoleResult compare_dipoles(const K &k, const kifmm::KernelSpec &spec, const Points &all,
+                             const std::vector<double> &mu, const Partition &part, int top_level, int leaf,
+                             double periodic_half, int grid, bool q_null = false)
+{
+  const int me = rank_of_world(), np = size_of_world();
+  kifmm::Options o;
+  o.order = 6;
+  o.leaf_size = leaf;
+  o.top_level = top_level;
+  if (periodic_half > 0) {
+    o.periodic = true;
+    o.fixed_root = true;
+    o.root_half_width = periodic_half;
+    o.periodic_grid = grid;
+  }
+  kifmm::FmmEvaluator<K> serial(k, spec, o), dist(k, spec, o);
+  const std::size_t n = all.size();
+  const double *q = q_null ? nullptr : all.q.data();
+  std::vector<double> ps(n), gs(3 * n), hs(6 * n);
+  serial.evaluate_dipoles(n, all.xyz.data(), q, mu.data(), n, all.xyz.data(), ps.data(), gs.data(), hs.data());
+  std::vector<double> xyz, qm, mm;
+  std::vector<std::size_t> idx;
+  const std::vector<int> owner = part(all, np);
+  for (std::size_t i = 0; i < n; ++i)
+    if (owner[i] == me) {
+      idx.push_back(i);
+      xyz.insert(xyz.end(), &all.xyz[3 * i], &all.xyz[3 * i] + 3);
+      qm.push_back(all.q[i]);
+      mm.insert(mm.end(), &mu[3 * i], &mu[3 * i] + 3);
+    }
+  const std::size_t m = idx.size();
+  std::vector<double> pd(m), gd(3 * m), hd(6 * m);
+  kifmm::MpiCommunicator comm(MPI_COMM_WORLD);
+  dist.evaluate_dipoles_distributed(comm, m, xyz.data(), q_null ? nullptr : qm.data(), mm.data(), pd.data(),
+                                    gd.data(), hd.data());
+  double err[3] = {0, 0, 0}, big[3] = {0, 0, 0};
+  for (std::size_t i = 0; i < n; ++i) {
+    big[0] = std::max(big[0], std::fabs(ps[i]));
+    for (int d = 0; d < 3; ++d) big[1] = std::max(big[1], std::fabs(gs[3 * i + d]));
+    for (int c = 0; c < 6; ++c) big[2] = std::max(big[2], std::fabs(hs[6 * i + c]));
+  }
+  for (std::size_t j = 0; j < m; ++j) {
+    const std::size_t i = idx[j];
+    err[0] = std::max(err[0], std::fabs(pd[j] - ps[i]));
+    for (int d = 0; d < 3; ++d) err[1] = std::max(err[1], std::fabs(gd[3 * j + d] - gs[3 * i + d]));
+    for (int c = 0; c < 6; ++c) err[2] = std::max(err[2], std::fabs(hd[6 * j + c] - hs[6 * i + c]));
+  }
+  MPI_Allreduce(MPI_IN_PLACE, err, 3, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  EXPECT_GT(big[2], 0.0);
+  return {err[0] / big[0], err[1] / big[1], err[2] / big[2]};
+}
+
+void check_dipoles_all_partitions(const Points &p, const std::vector<double> &mu, int top_level, int leaf,
+                                  double periodic_half = 0.0, int grid = 0, bool q_null = false)
+{
+  kifmm::LaplaceKernel k;
+  kifmm::KernelSpec spec;
+  for (int j = 0; j < 4; ++j) {
+    const DipoleResult r = compare_dipoles(k, spec, p, mu, kPartitions[j], top_level, leaf, periodic_half, grid, q_null);
+    const std::string what = std::string(kPartitionNames[j]) + ", top level " + std::to_string(top_level) + ", leaf " +
+        std::to_string(leaf) + ", grid " + std::to_string(grid) + (q_null ? ", no charges" : "");
+    EXPECT_LE(r.pot, 1e-10) << what;
+    EXPECT_LE(r.grad, 1e-10) << what;
+    EXPECT_LE(r.hess, 1e-10) << what;
+  }
+}
+
+}    // namespace
+
+// Charges and point dipoles, open boundaries: the moments travel with the ghost and LET points
+// (small leaves: locally essential trees below open frontier cells); without charges too
+TEST(Distributed, PointDipolesEqualSerial)
+{
+  Points p = plummer(1500, 51);
+  const std::vector<double> mu = some_moments(p, 52);
+  for (int top : {0, 3}) check_dipoles_all_partitions(p, mu, top, 24);
+  check_dipoles_all_partitions(p, mu, 0, 6);
+  check_dipoles_all_partitions(p, mu, 0, 24, 0.0, 0, true);
+}
+
+// The same periodic (Laplace, tin-foil): the octree of the cell and the single-level grid (the
+// dipoles' part of the background moments and of the wrap correction summed over ranks)
+TEST(Distributed, PeriodicPointDipolesEqualSerial)
+{
+  Points p = uniform_cube(1200, 53);
+  const std::vector<double> mu = some_moments(p, 54);
+  check_dipoles_all_partitions(p, mu, 0, 24, 1.0);
+  check_dipoles_all_partitions(p, mu, 0, 24, 1.0, 4);
+  check_dipoles_all_partitions(p, mu, 0, 24, 1.0, 3, true);
+}
+
+// Yukawa dipoles, open boundaries
+TEST(Distributed, YukawaPointDipolesEqualSerial)
+{
+  Points p = two_clusters(1000, 55);
+  const std::vector<double> mu = some_moments(p, 56);
+  kifmm::KernelSpec spec;
+  spec.type = kifmm::KernelType::Yukawa;
+  spec.kappa = 2.0;
+  kifmm::YukawaKernel k{2.0};
+  for (int j = 0; j < 4; ++j) {
+    const DipoleResult r = compare_dipoles(k, spec, p, mu, kPartitions[j], j % 2 ? 3 : 0, 24, 0.0, 0);
+    EXPECT_LE(r.pot, 1e-10) << kPartitionNames[j];
+    EXPECT_LE(r.grad, 1e-10) << kPartitionNames[j];
+    EXPECT_LE(r.hess, 1e-10) << kPartitionNames[j];
+  }
+}
+
+// The per-point virial of charges and dipoles on several ranks (each rank its own points as
+// sources and targets) equals the one-process virial of all points: open boundaries
+// (dipole_point_virial) and the periodic grid (periodic_dipole_point_virial: the offset field's
+// cell moments summed over ranks)
+TEST(Distributed, DipoleVirialEqualsSerial)
+{
+  const int me = rank_of_world(), np = size_of_world();
+  for (bool periodic : {false, true}) {
+    Points all = uniform_cube(1200, 57);
+    const std::vector<double> mu = some_moments(all, 58);
+    kifmm::Options o;
+    o.order = 6;
+    o.leaf_size = 24;
+    if (periodic) {
+      o.periodic = true;
+      o.fixed_root = true;
+      o.root_half_width = 1.0;
+      o.periodic_grid = 4;
+    }
+    const std::size_t n = all.size();
+    const double center[3] = {0.0, 0.0, 0.0};
+    auto serial = kifmm::make_evaluator(kifmm::KernelSpec{}, o), dist = kifmm::make_evaluator(kifmm::KernelSpec{}, o);
+    std::vector<double> gs(3 * n), hs(6 * n), ws(6 * n);
+    serial->evaluate_dipoles(n, all.xyz.data(), all.q.data(), mu.data(), n, all.xyz.data(), nullptr, gs.data(),
+                             hs.data());
+    if (periodic)
+      kifmm::periodic_dipole_point_virial(*serial, n, all.xyz.data(), all.q.data(), mu.data(), n, all.xyz.data(),
+                                          all.q.data(), mu.data(), gs.data(), hs.data(), 1.0, ws.data());
+    else
+      kifmm::dipole_point_virial(*serial, n, all.xyz.data(), all.q.data(), mu.data(), n, all.xyz.data(), all.q.data(),
+                                 mu.data(), gs.data(), hs.data(), 1.0, ws.data(), center);
+    std::vector<double> xyz, q, m, g, h;
+    std::vector<std::size_t> idx;
+    const std::vector<int> owner = random_owner(all, np);
+    for (std::size_t i = 0; i < n; ++i)
+      if (owner[i] == me) {
+        idx.push_back(i);
+        xyz.insert(xyz.end(), &all.xyz[3 * i], &all.xyz[3 * i] + 3);
+        q.push_back(all.q[i]);
+        m.insert(m.end(), &mu[3 * i], &mu[3 * i] + 3);
+        g.insert(g.end(), &gs[3 * i], &gs[3 * i] + 3);
+        h.insert(h.end(), &hs[6 * i], &hs[6 * i] + 6);
+      }
+    const std::size_t k = idx.size();
+    std::vector<double> wd(6 * k);
+    kifmm::MpiCommunicator comm(MPI_COMM_WORLD);
+    if (periodic)
+      kifmm::periodic_dipole_point_virial(*dist, comm, k, xyz.data(), q.data(), m.data(), g.data(), h.data(), 1.0,
+                                          wd.data());
+    else
+      kifmm::dipole_point_virial(*dist, comm, k, xyz.data(), q.data(), m.data(), g.data(), h.data(), 1.0, wd.data(),
+                                 center);
+    double wmax = 0, err = 0;
+    for (double v : ws) wmax = std::max(wmax, std::fabs(v));
+    for (std::size_t j = 0; j < k; ++j)
+      for (int c = 0; c < 6; ++c) err = std::max(err, std::fabs(wd[6 * j + c] - ws[6 * idx[j] + c]));
+    MPI_Allreduce(MPI_IN_PLACE, &err, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+    EXPECT_GT(wmax, 0.0);
+    EXPECT_LE(err / wmax, 1e-10) << (periodic ? "periodic grid" : "open");
+  }
 }

@@ -4,7 +4,8 @@
 // (charge-charge, charge-dipole and dipole-dipole terms). Forces, torques, energy, pressure
 // tensor, the order chosen for a requested accuracy, energy conservation under fix nve/sphere
 // update dipole, fix kifmm/stride's held forces and torques, and the clear errors of what the
-// dipole sum does not cover. Under mpiexec the same comparisons hold on several ranks.
+// dipole sum does not cover. Under mpiexec the same comparisons hold on several ranks, and the
+// distributed evaluation equals the run on one rank.
 #include "kspace_kifmm.h"
 #include "lammps_fixture.h"
 
@@ -14,6 +15,7 @@
 #include "lammps.h"
 #include "library.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -26,11 +28,11 @@ class KSpaceDipoles : public LammpsFixture {
  protected:
   // k^3 spheres on a jittered simple cubic lattice of spacing 1.25 in an open box: type 1
   // charge and dipole, type 2 charge only, type 3 dipole only
-  void spheres(int k, const std::string &boundary = "f f f")
+  static std::string sphere_input(int k, const std::string &boundary = "f f f")
   {
     const double h = 0.625 * k + 1.0;
     const std::string lo = std::to_string(-h), hi = std::to_string(h);
-    commands("units lj\natom_style hybrid sphere dipole\nboundary " + boundary + "\natom_modify map array\n"
+    return "units lj\natom_style hybrid sphere dipole\nboundary " + boundary + "\natom_modify map array\n"
              "lattice sc 1.25\nregion box block " + lo + " " + hi + " " + lo + " " + hi + " " + lo + " " + hi +
              " units box\ncreate_box 3 box\nregion inner block 0 " + std::to_string(k - 1) + " 0 " +
              std::to_string(k - 1) + " 0 " + std::to_string(k - 1) + "\n"
@@ -41,8 +43,9 @@ class KSpaceDipoles : public LammpsFixture {
              "set type 1 charge 1.0\nset type 2 charge -1.2\nset type 3 charge 0.0\n"
              "set type 1*3 dipole/random 4242 0.8\nset type 2 dipole 0 0 0\n"
              "thermo_style custom step pe elong press pxx pyy pzz pxy pxz pyz\nthermo_modify norm no\n"
-             "neighbor 0.3 bin\nneigh_modify one 10000 page 200000\n");
+             "neighbor 0.3 bin\nneigh_modify one 10000 page 200000\n";
   }
+  void spheres(int k, const std::string &boundary = "f f f") { commands(sphere_input(k, boundary)); }
   struct Result {
     std::map<int, Vec3> f, t;
     double energy = 0, p[6] = {0, 0, 0, 0, 0, 0};
@@ -189,6 +192,42 @@ TEST_F(KSpaceDipoles, PerAtomVirialEqualsThePairStyle)
     }
   std::printf("  per-atom virial: relative difference %.2e\n", std::sqrt(num / den));
   EXPECT_LE(std::sqrt(num / den), 1e-7);
+}
+
+// On several ranks (ctest runs this binary under mpiexec -np 2 and 4) the distributed dipole
+// evaluation (moments carried with the ghost atoms and the locally essential trees) gives the
+// forces, torques, energy and pressure tensor of the same run on one rank (a second LAMMPS on
+// MPI_COMM_SELF on every rank): open boundaries with small and default leaves, periodic with the
+// octree and the single-level grid.
+TEST_F(KSpaceDipoles, SeveralRanksEqualOneRank)
+{
+  const std::string run = "pair_style zero 1.0\npair_coeff * *\nkspace_style kifmm 1e-6\nkspace_modify kifmm ";
+  struct Case {
+    const char *boundary, *modify;
+  } cases[] = {{"f f f", "order 6 leaf 8"}, {"f f f", "order 6 leaf 40"}, {"p p p", "order 6 leaf 24 grid no"},
+               {"p p p", "order 6 grid 3"}};    // (a leaf size: one rank would choose it from the atoms)
+  const char *keys[6] = {"pxx", "pyy", "pzz", "pxy", "pxz", "pyz"};
+  for (const Case &c : cases) {
+    const std::string lines = sphere_input(8, c.boundary) + run + c.modify + "\nrun 0 post no\n";
+    create();
+    commands(lines);
+    const Result all{forces_by_id(), torques_by_id(), thermo("elong")};
+    double p_all[6], p_one[6];
+    for (int k = 0; k < 6; ++k) p_all[k] = thermo(keys[k]);
+    LAMMPS_NS::LAMMPS *one = open_lammps(MPI_COMM_SELF);
+    run_lines(one, lines);
+    const Result single{kifmm_test::forces_by_id(one), kifmm_test::torques_by_id(one), lammps_get_thermo(one, "elong")};
+    double scale = 0, ep = 0;
+    for (int k = 0; k < 6; ++k) p_one[k] = lammps_get_thermo(one, keys[k]), scale = std::max(scale, std::fabs(p_one[k]));
+    for (int k = 0; k < 6; ++k) ep = std::max(ep, std::fabs(p_all[k] - p_one[k]) / scale);
+    delete one;
+    EXPECT_EQ(all.f.size(), single.f.size()) << c.modify;
+    EXPECT_GT(all.f.size(), 300u) << c.modify;
+    EXPECT_LE(relative_force_error(all.f, single.f), 1e-10) << c.modify;
+    EXPECT_LE(relative_force_error(all.t, single.t), 1e-10) << c.modify;
+    EXPECT_LE(rel(all.energy, single.energy), 1e-10) << c.modify;
+    EXPECT_LE(ep, 1e-10) << c.modify;
+  }
 }
 
 // ---------------------------------------------------------------- periodic

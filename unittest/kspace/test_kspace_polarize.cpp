@@ -4,11 +4,13 @@
 // (Laplace field tensors, the field of the charges and of fix efield), the forces against the
 // numerical derivative of the total energy (kspace, fix efield and the polarization energy),
 // energy conservation under fix nve/sphere, the solve's report, and the clear errors. Under
-// mpiexec the same comparisons hold on several ranks.
+// mpiexec the same comparisons hold on several ranks, and the distributed solve equals the
+// solve on one rank.
 #include "lammps_fixture.h"
 
 #include "atom.h"
 #include "lammps.h"
+#include "library.h"
 
 #include <Eigen/Dense>
 
@@ -33,25 +35,31 @@ class Polarize : public LammpsFixture {
  protected:
   // k^3 spheres of diameter 1 on a jittered simple cubic lattice of spacing 1.2 (open box):
   // type 1 polarizable and neutral, type 2 charge +1, type 3 charge -1; a uniform field
-  void spheres(int k, const std::string &boundary = "f f f")
+  static std::string sphere_input(int k, const std::string &boundary = "f f f")
   {
     const std::string lo = "-1.0", hi = std::to_string(1.2 * (k - 1) + 1.0), km = std::to_string(k - 1);
-    commands("units lj\natom_style hybrid sphere dipole\nboundary " + boundary + "\natom_modify map array\n"
+    return "units lj\natom_style hybrid sphere dipole\nboundary " + boundary + "\natom_modify map array\n"
              "lattice sc 1.2\nregion box block " + lo + " " + hi + " " + lo + " " + hi + " " + lo + " " + hi +
              " units box\ncreate_box 3 box\nregion inner block 0 " + km + " 0 " + km + " 0 " + km +
              "\ncreate_atoms 1 region inner\ndisplace_atoms all random 0.08 0.08 0.08 4711 units box\n"
              "set type 1 type/fraction 2 0.2 99\nset type 1 type/fraction 3 0.2 98\n"
              "set type 1 charge 0.0\nset type 2 charge 1.0\nset type 3 charge -1.0\nset group all dipole 0 0 0\n"
-             "group pol type 1\nneighbor 0.3 bin\nneigh_modify one 10000 page 200000\n");
-    commands("fix ef all efield " + std::to_string(kField[0]) + " " + std::to_string(kField[1]) + " " +
-             std::to_string(kField[2]) + "\nfix_modify ef energy yes\n");
+             "group pol type 1\nneighbor 0.3 bin\nneigh_modify one 10000 page 200000\n"
+             "fix ef all efield " + std::to_string(kField[0]) + " " + std::to_string(kField[1]) + " " +
+             std::to_string(kField[2]) + "\nfix_modify ef energy yes\n";
+  }
+  void spheres(int k, const std::string &boundary = "f f f") { commands(sphere_input(k, boundary)); }
+  static std::string polarize_input(const std::string &accuracy, const std::string &fix_args,
+                                    const std::string &modify = "")
+  {
+    return "fix pol pol kifmm/polarize " + fix_args + "\nfix_modify pol energy yes\n"
+           "kspace_style kifmm " + accuracy + "\n"
+           "thermo_style custom step pe elong f_pol f_pol[1] f_pol[2] f_pol[3]\nthermo_modify norm no\n" +
+           (modify.empty() ? std::string() : "kspace_modify kifmm " + modify + "\n");
   }
   void polarize(const std::string &accuracy, const std::string &fix_args, const std::string &modify = "")
   {
-    commands("fix pol pol kifmm/polarize " + fix_args + "\nfix_modify pol energy yes\n"
-             "kspace_style kifmm " + accuracy + "\n"
-             "thermo_style custom step pe elong f_pol f_pol[1] f_pol[2] f_pol[3]\nthermo_modify norm no\n");
-    if (!modify.empty()) command("kspace_modify kifmm " + modify);
+    commands(polarize_input(accuracy, fix_args, modify));
   }
 
   // the dense solve of mu_i / alpha - sum_j T_ij mu_j = E_i (E: the field and the charges' field)
@@ -120,6 +128,33 @@ TEST_F(Polarize, DipolesEqualTheDenseSolve)
   // the next evaluation starts from these dipoles: a few iterations (its order may differ)
   command("run 0 post no");
   EXPECT_LE(evaluate("f_pol[1]"), first / 2);
+}
+
+// On several ranks (ctest runs this binary under mpiexec -np 2) every field evaluation of the
+// solve is distributed; the dipoles, forces and energy equal the same run on one rank (a second
+// LAMMPS on MPI_COMM_SELF), open boundaries with a far field and the periodic grid
+TEST_F(Polarize, SeveralRanksEqualOneRank)
+{
+  for (const char *boundary : {"f f f", "p p p"}) {
+    const std::string lines = sphere_input(8, boundary) +
+        polarize_input("1e-8", "permittivity 10 tol 1e-12", std::string("order 6 leaf 16") +
+                                                               (boundary[0] == 'p' ? " grid 3" : "")) +
+        "pair_style zero 1.0\npair_coeff * *\nrun 0 post no\n";
+    create();
+    commands(lines);
+    const std::map<int, Vec3> mu = dipoles(), f = forces_by_id();
+    const double e = thermo("pe");
+    LAMMPS_NS::LAMMPS *one = open_lammps(MPI_COMM_SELF);
+    run_lines(one, lines);
+    const std::map<int, Vec3> mu1 = dipoles_by_id(one), f1 = kifmm_test::forces_by_id(one);
+    const double e1 = lammps_get_thermo(one, "pe");
+    delete one;
+    EXPECT_EQ(mu.size(), mu1.size());
+    EXPECT_GT(mu.size(), 300u);
+    EXPECT_LE(relative_force_error(mu, mu1), 1e-9) << boundary;
+    EXPECT_LE(relative_force_error(f, f1), 1e-9) << boundary;
+    EXPECT_LE(std::fabs(e - e1), 1e-9 * std::fabs(e1)) << boundary;
+  }
 }
 
 // alpha as a number and as an atom-style variable give the permittivity's dipoles

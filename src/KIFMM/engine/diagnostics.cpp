@@ -99,23 +99,45 @@ void exact_gradient(const Evaluator &ev, Communicator *comm, std::size_t n_src,
   std::copy(g.begin() + offset, g.begin() + offset + 3 * n_trg, grad);
 }
 
-void exact_dipole_field(const Evaluator &ev, std::size_t n_src, const double *src_xyz, const double *src_q,
-                        const double *src_mu, std::size_t n_trg, const double *trg_xyz, double *grad, double *hess)
+void exact_dipole_field(const Evaluator &ev, Communicator *comm, std::size_t n_src, const double *src_xyz,
+                        const double *src_q, const double *src_mu, std::size_t n_trg, const double *trg_xyz,
+                        double *grad, double *hess)
 {
   const Options &opt = ev.options();
-  if (opt.periodic && (opt.periodic_dims == 2 || ev.kernel().type != KernelType::Laplace)) {
-    // a slab, periodic yukawa: the engine itself at order 14
-    Options hi = opt;
-    hi.order = 14;
-    hi.leaf_size = 0;
-    hi.cache_dir.clear();
-    make_evaluator(ev.kernel(), hi)->evaluate_dipoles(n_src, src_xyz, src_q, src_mu, n_trg, trg_xyz, nullptr, grad,
-                                                      hess);
-  } else if (opt.periodic)
-    periodic_dipole_direct_sum(opt.root_center, opt.root_half_width, opt.root_shape, n_src, src_xyz, src_q, src_mu,
-                               n_trg, trg_xyz, nullptr, grad, hess);
-  else
-    direct_sum_dipoles(ev.kernel(), n_src, src_xyz, src_q, src_mu, n_trg, trg_xyz, nullptr, grad, hess);
+  auto sum = [&](std::size_t nt, const double *t, double *g, double *h) {
+    if (nt == 0 || n_src == 0) return;
+    if (opt.periodic && (opt.periodic_dims == 2 || ev.kernel().type != KernelType::Laplace)) {
+      // a slab, periodic yukawa: the engine itself at order 14
+      Options hi = opt;
+      hi.order = 14;
+      hi.leaf_size = 0;
+      hi.cache_dir.clear();
+      make_evaluator(ev.kernel(), hi)->evaluate_dipoles(n_src, src_xyz, src_q, src_mu, nt, t, nullptr, g, h);
+    } else if (opt.periodic)
+      periodic_dipole_direct_sum(opt.root_center, opt.root_half_width, opt.root_shape, n_src, src_xyz, src_q, src_mu,
+                                 nt, t, nullptr, g, h);
+    else
+      direct_sum_dipoles(ev.kernel(), n_src, src_xyz, src_q, src_mu, nt, t, nullptr, g, h);
+  };
+  if (!comm || comm->size() == 1) {
+    std::fill(grad, grad + 3 * n_trg, 0.0);
+    if (hess) std::fill(hess, hess + 6 * n_trg, 0.0);
+    sum(n_trg, trg_xyz, grad, hess);
+    return;
+  }
+  // the targets of all ranks on every rank (few); each rank sums its own sources on them (the
+  // references are linear in the sources), then the sums are added over the ranks
+  std::vector<double> mine(trg_xyz, trg_xyz + 3 * n_trg), all;
+  std::vector<int> counts;
+  comm->allgatherv(mine, all, counts);
+  std::size_t offset = 0;
+  for (int r = 0; r < comm->rank(); ++r) offset += (std::size_t) counts[r];
+  const std::size_t m = all.size() / 3;
+  std::vector<double> gh(9 * m, 0.0);    // gradients, then second derivatives
+  sum(m, all.data(), gh.data(), gh.data() + 3 * m);
+  if (!gh.empty()) comm->allreduce_sum(gh.data(), gh.size());
+  std::copy(gh.begin() + offset, gh.begin() + offset + 3 * n_trg, grad);
+  if (hess) std::copy(gh.begin() + 3 * m + 2 * offset, gh.begin() + 3 * m + 2 * offset + 6 * n_trg, hess);
 }
 
 std::vector<std::size_t> sample_without_replacement(std::vector<std::size_t> candidates,

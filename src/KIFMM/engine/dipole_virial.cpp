@@ -23,9 +23,10 @@ double apply(const double *q, const double *mu, std::size_t k, const double *g, 
   return v;
 }
 
-// T[9k + 3a + b] -= D_k phi^(a) for a = 0..2 (strengths times w_a)
-void subtract_moment_fields(Evaluator &ev, std::size_t n_src, const double *src_xyz, const double *src_q,
-                            const double *src_mu, const std::vector<double> &w, std::size_t n_trg,
+// T[9k + 3a + b] -= D_k phi^(a) for a = 0..2 (strengths times w_a); with comm distributed (the
+// sources are the targets, this rank's points)
+void subtract_moment_fields(Evaluator &ev, Communicator *comm, std::size_t n_src, const double *src_xyz,
+                            const double *src_q, const double *src_mu, const std::vector<double> &w, std::size_t n_trg,
                             const double *trg_xyz, const double *trg_q, const double *trg_mu, std::vector<double> &T)
 {
   std::vector<double> qa(n_src), ma(src_mu ? 3 * n_src : 0), g(3 * n_trg), h(6 * n_trg);
@@ -35,8 +36,12 @@ void subtract_moment_fields(Evaluator &ev, std::size_t n_src, const double *src_
       if (src_mu)
         for (int c = 0; c < 3; ++c) ma[3 * j + c] = src_mu[3 * j + c] * w[3 * j + a];
     }
-    ev.evaluate_dipoles(n_src, src_xyz, qa.data(), src_mu ? ma.data() : nullptr, n_trg, trg_xyz, nullptr, g.data(),
-                        h.data());
+    if (comm)
+      ev.evaluate_dipoles_distributed(*comm, n_src, src_xyz, qa.data(), src_mu ? ma.data() : nullptr, nullptr,
+                                      g.data(), h.data());
+    else
+      ev.evaluate_dipoles(n_src, src_xyz, qa.data(), src_mu ? ma.data() : nullptr, n_trg, trg_xyz, nullptr,
+                          g.data(), h.data());
     for (std::size_t k = 0; k < n_trg; ++k)
       for (int b = 0; b < 3; ++b) T[9 * k + 3 * a + b] -= apply(trg_q, trg_mu, k, &g[3 * k], &h[6 * k], b);
   }
@@ -63,18 +68,35 @@ void dipole_point_virial(Evaluator &ev, std::size_t n_src, const double *src_xyz
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b)
         T[9 * k + 3 * a + b] = (trg_xyz[3 * k + a] - center[a]) * apply(trg_q, trg_mu, k, &grad[3 * k], &hess[6 * k], b);
-  subtract_moment_fields(ev, n_src, src_xyz, src_q, src_mu, w, n_trg, trg_xyz, trg_q, trg_mu, T);
+  subtract_moment_fields(ev, nullptr, n_src, src_xyz, src_q, src_mu, w, n_trg, trg_xyz, trg_q, trg_mu, T);
   to_virial(T, n_trg, prefactor, virial);
 }
 
-void periodic_dipole_point_virial(Evaluator &ev, std::size_t n_src, const double *src_xyz, const double *src_q,
-                                  const double *src_mu, std::size_t n_trg, const double *trg_xyz,
-                                  const double *trg_q, const double *trg_mu, const double *grad,
-                                  const double *hess, double prefactor, double *virial)
+void dipole_point_virial(Evaluator &ev, Communicator &comm, std::size_t n, const double *xyz, const double *q,
+                         const double *mu, const double *grad, const double *hess, double prefactor, double *virial,
+                         const double center[3])
+{
+  std::vector<double> w(3 * n), T(9 * n);
+  for (std::size_t j = 0; j < n; ++j)
+    for (int a = 0; a < 3; ++a) w[3 * j + a] = xyz[3 * j + a] - center[a];
+  for (std::size_t k = 0; k < n; ++k)
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) T[9 * k + 3 * a + b] = w[3 * k + a] * apply(q, mu, k, &grad[3 * k], &hess[6 * k], b);
+  subtract_moment_fields(ev, &comm, n, xyz, q, mu, w, n, xyz, q, mu, T);
+  to_virial(T, n, prefactor, virial);
+}
+
+namespace {
+
+// periodic_dipole_point_virial, with comm distributed (sources = targets, this rank's points)
+void periodic_virial(Evaluator &ev, Communicator *comm, std::size_t n_src, const double *src_xyz,
+                     const double *src_q, const double *src_mu, std::size_t n_trg, const double *trg_xyz,
+                     const double *trg_q, const double *trg_mu, const double *grad, const double *hess,
+                     double prefactor, double *virial)
 {
   std::vector<double> w(3 * n_src), u(3 * n_trg), psi(9 * n_trg), chi(18 * n_trg), T(9 * n_trg);
-  ev.periodic_dipole_virial_fields(n_src, src_xyz, src_q, src_mu, n_trg, trg_xyz, w.data(), u.data(), psi.data(),
-                                   chi.data());
+  ev.periodic_dipole_virial_fields(comm, n_src, src_xyz, src_q, src_mu, n_trg, trg_xyz, w.data(), u.data(),
+                                   psi.data(), chi.data());
   for (std::size_t k = 0; k < n_trg; ++k)
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b) {
@@ -84,8 +106,26 @@ void periodic_dipole_point_virial(Evaluator &ev, std::size_t n_src, const double
           for (int c = 0; c < 3; ++c) v += trg_mu[3 * k + c] * chi[18 * k + 6 * a + hs[c][b]];
         T[9 * k + 3 * a + b] = v;
       }
-  subtract_moment_fields(ev, n_src, src_xyz, src_q, src_mu, w, n_trg, trg_xyz, trg_q, trg_mu, T);
+  subtract_moment_fields(ev, comm, n_src, src_xyz, src_q, src_mu, w, n_trg, trg_xyz, trg_q, trg_mu, T);
   to_virial(T, n_trg, prefactor, virial);
+}
+
+}    // namespace
+
+void periodic_dipole_point_virial(Evaluator &ev, std::size_t n_src, const double *src_xyz, const double *src_q,
+                                  const double *src_mu, std::size_t n_trg, const double *trg_xyz,
+                                  const double *trg_q, const double *trg_mu, const double *grad,
+                                  const double *hess, double prefactor, double *virial)
+{
+  periodic_virial(ev, nullptr, n_src, src_xyz, src_q, src_mu, n_trg, trg_xyz, trg_q, trg_mu, grad, hess, prefactor,
+                  virial);
+}
+
+void periodic_dipole_point_virial(Evaluator &ev, Communicator &comm, std::size_t n, const double *xyz,
+                                  const double *q, const double *mu, const double *grad, const double *hess,
+                                  double prefactor, double *virial)
+{
+  periodic_virial(ev, &comm, n, xyz, q, mu, n, xyz, q, mu, grad, hess, prefactor, virial);
 }
 
 }    // namespace kifmm

@@ -112,7 +112,7 @@ namespace {
 bool global_root(Communicator &comm, const DistributedConfig &cfg, const LocalPoints &pts, DistributedData &out)
 {
   const std::size_t n = pts.n;
-  const double *xyz = pts.xyz, *q = pts.q;
+  const double *xyz = pts.xyz;
   // root: bounding cube of all points (every point is a target), as bounding_cube()
   double b[6];
   for (int d = 0; d < 3; ++d) b[d] = b[3 + d] = std::numeric_limits<double>::max();
@@ -122,7 +122,7 @@ bool global_root(Communicator &comm, const DistributedConfig &cfg, const LocalPo
       b[3 + d] = std::min(b[3 + d], -xyz[3 * i + d]);
     }
   uint64_t cnt[2] = {n, 0};
-  for (std::size_t i = 0; i < n; ++i) cnt[1] += q[i] != 0.0;
+  for (std::size_t i = 0; i < n; ++i) cnt[1] += pts.source(i);
   {
     Timer t(out.t_comm);
     comm.allreduce_min(b, 6);
@@ -155,7 +155,7 @@ std::vector<int> refine_top_level(Communicator &comm, const LocalPoints &pts, co
     const int k = slot[at[i]];
     if (k < 0) continue;
     const int oct = (int) ((keys[i] >> shift) & 7);
-    counts[16 * (std::size_t) k + oct] += pts.q[i] != 0.0;
+    counts[16 * (std::size_t) k + oct] += pts.source(i);
     ++counts[16 * (std::size_t) k + 8 + oct];
   }
   {
@@ -381,7 +381,7 @@ void import_whole_cells(Communicator &comm, const LocalPoints &pts, const Fronti
     for (int f : got[r]) {
       for (int k = o.fstart[f]; k < o.fstart[f + 1]; ++k) {
         const int i = o.fpoints[k];
-        send[r].insert(send[r].end(), {xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2], q[i]});
+        pack_point(send[r], xyz, q, pts.moments ? pts.mu : nullptr, i);
       }
     }
   for (int r = 0; r < nranks; ++r) out.ghost_bytes += sizeof(double) * send[r].size();
@@ -389,23 +389,22 @@ void import_whole_cells(Communicator &comm, const LocalPoints &pts, const Fronti
     Timer t(out.t_comm);
     comm.alltoallv(send, recv);
   }
+  const bool moments = pts.moments;
+  const std::size_t w = point_record_size(moments);
   std::size_t nghost = 0;
   out.ghost_from.assign(nranks + 1, 0);
-  for (int r = 0; r < nranks; ++r) out.ghost_from[r + 1] = out.ghost_from[r] + recv[r].size() / 4;
-  for (const auto &v : recv) nghost += v.size() / 4;
+  for (int r = 0; r < nranks; ++r) out.ghost_from[r + 1] = out.ghost_from[r] + recv[r].size() / w;
+  for (const auto &v : recv) nghost += v.size() / w;
   out.n_own = n;
-  out.xyz.resize(3 * (n + nghost));
-  out.q.resize(n + nghost);
-  std::copy(xyz, xyz + 3 * n, out.xyz.begin());
-  std::copy(q, q + n, out.q.begin());
-  std::size_t k = n;
+  out.xyz.assign(xyz, xyz + 3 * n);
+  out.q.assign(q, q + n);
+  out.mu.clear();
+  if (moments) out.mu.assign(pts.mu, pts.mu + 3 * n);
+  out.xyz.reserve(3 * (n + nghost));
+  out.q.reserve(n + nghost);
+  if (moments) out.mu.reserve(3 * (n + nghost));
   for (const auto &v : recv)
-    for (std::size_t j = 0; j + 3 < v.size(); j += 4, ++k) {
-      out.xyz[3 * k] = v[j];
-      out.xyz[3 * k + 1] = v[j + 1];
-      out.xyz[3 * k + 2] = v[j + 2];
-      out.q[k] = v[j + 3];
-    }
+    for (std::size_t j = 0; j + w <= v.size(); j += w) unpack_point(&v[j], moments, out.xyz, out.q, out.mu);
 }
 
 }    // namespace
@@ -414,6 +413,7 @@ void distributed_setup(Communicator &comm, const DistributedConfig &config, cons
                        DistributedData &out)
 {
   out = DistributedData();
+  out.moments = pts.moments;
   DistributedConfig cfg = config;
   cfg.leaf_size = std::max(cfg.leaf_size, 1);
   cfg.max_depth = std::min(std::max(cfg.max_depth, 0), kMortonBits);
@@ -497,7 +497,7 @@ void let_fragment(const Octree &tree, int cf, const std::vector<AskingCell> &ask
       kind.push_back(kd);
       // points instead of the density where they take fewer bytes (the asking rank computes
       // the density from them: all points of the cell, so its subtree is the global one)
-      const bool by_points = D.gsrc > 0 && 4 * (int) D.gtrg < nsurf;
+      const bool by_points = D.gsrc > 0 && point_record_size(dd.moments) * D.gtrg < (std::size_t) nsurf;
       density.push_back(D.gsrc > 0 && !by_points);
       if (by_points || (D.leaf() && points_needed(D)) || w_direct(D, P)) ranges.emplace_back(D.trg_begin, D.trg_end);
     }
@@ -520,7 +520,7 @@ void let_fragment(const Octree &tree, int cf, const std::vector<AskingCell> &ask
   }
   for (std::size_t k = 0; k < emitted.size(); ++k)
     if (density[k]) out.insert(out.end(), &up[(std::size_t) emitted[k] * nsurf], &up[(std::size_t) (emitted[k] + 1) * nsurf]);
-  for (int i : pts) out.insert(out.end(), {dd.xyz[3 * i], dd.xyz[3 * i + 1], dd.xyz[3 * i + 2], dd.q[i]});
+  for (int i : pts) pack_point(out, dd.xyz.data(), dd.q.data(), dd.moments ? dd.mu.data() : nullptr, (std::size_t) i);
 }
 
 }    // namespace
@@ -629,6 +629,8 @@ void append_let(const std::vector<std::vector<double>> &recv, int nsurf, Distrib
 {
   TopTree &top = dd.top;
   const int ntop = dd.n_top_global;
+  const bool moments = dd.moments;
+  const std::size_t w = point_record_size(moments);
   for (const auto &v : recv) {
     std::size_t k = 0;
     while (k < v.size()) {
@@ -658,10 +660,7 @@ void append_let(const std::vector<std::vector<double>> &recv, int nsurf, Distrib
           std::copy(&v[k], &v[k] + nsurf, &dd.let_density[(std::size_t) (base - ntop + j) * nsurf]);
           k += nsurf;
         }
-      for (std::size_t i = 0; i < npts; ++i, k += 4) {
-        dd.xyz.insert(dd.xyz.end(), {v[k], v[k + 1], v[k + 2]});
-        dd.q.push_back(v[k + 3]);
-      }
+      for (std::size_t i = 0; i < npts; ++i, k += w) unpack_point(&v[k], moments, dd.xyz, dd.q, dd.mu);
       dd.let_cells += ncells;
     }
   }

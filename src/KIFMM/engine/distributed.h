@@ -22,6 +22,8 @@ struct DistributedData {
   std::vector<char> top_internal;    // global top cells with children in the global top tree
   uint64_t global_points = 0, global_sources = 0;
   std::vector<double> xyz, q;        // this rank's points (first n_own, input order), then ghosts
+  bool moments = false;              // the points carry dipole moments
+  std::vector<double> mu;            // their dipole moments (3 per point when moments)
   std::size_t n_own = 0;
   std::vector<int> frontier;         // top cells without children in the top tree
   std::vector<int> frontier_index;   // per global top cell: its index in frontier, or -1
@@ -65,12 +67,34 @@ struct DistributedConfig {
   bool periodic = false;
 };
 
-// This rank's points: n, xyz interleaved, strengths q (every point is a target, the ones with
-// q != 0 are sources).
+// This rank's points: n, xyz interleaved, strengths q and, for dipole evaluations (moments: the
+// same on every rank), moments mu (3 per point). Every point is a target; the ones with q != 0
+// or mu != 0 are sources.
 struct LocalPoints {
   std::size_t n = 0;
-  const double *xyz = nullptr, *q = nullptr;
+  const double *xyz = nullptr, *q = nullptr, *mu = nullptr;
+  bool moments = false;
+  bool source(std::size_t i) const
+  {
+    return q[i] != 0.0 || (moments && (mu[3 * i] != 0.0 || mu[3 * i + 1] != 0.0 || mu[3 * i + 2] != 0.0));
+  }
 };
+
+// A point in the messages of the distributed evaluation: x y z q, and mx my mz with moments.
+inline std::size_t point_record_size(bool moments) { return moments ? 7 : 4; }
+inline void pack_point(std::vector<double> &out, const double *xyz, const double *q, const double *mu, std::size_t i)
+{
+  out.insert(out.end(), {xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2], q[i]});
+  if (mu) out.insert(out.end(), {mu[3 * i], mu[3 * i + 1], mu[3 * i + 2]});
+}
+// appends the point record at v to xyz, q (and mu when moments)
+inline void unpack_point(const double *v, bool moments, std::vector<double> &xyz, std::vector<double> &q,
+                         std::vector<double> &mu)
+{
+  xyz.insert(xyz.end(), v, v + 3);
+  q.push_back(v[3]);
+  if (moments) mu.insert(mu.end(), v + 4, v + 7);
+}
 
 // Collective: global root and counts, top tree, frontier cells, who holds what, and the import
 // of the whole cells' points (ghosts).
@@ -90,7 +114,7 @@ void distributed_setup(Communicator &comm, const DistributedConfig &config, cons
 //   cells: the children of every cell P that touches an asking cell of P's level that splits,
 //          or an asking leaf of P's level or coarser (colleagues and V lists, the descent of
 //          U/W lists), with their global counts and densities (or, for a cell of fewer than
-//          nsurf / 4 points, its points, which take fewer bytes);
+//          nsurf / 4 points (nsurf / 7 with dipole moments), its points, which take fewer bytes);
 //   points: of the leaves that touch an asking leaf or an asking cell of their level or finer
 //          (U, X lists), and of the subtrees of at most nsurf sources whose parent touches a
 //          coarser asking leaf (W lists, evaluated directly).

@@ -32,6 +32,62 @@ template <class K>
 void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, const double *xyz, const double *q,
                                            double *pot, double *grad)
 {
+  LocalPoints pts;
+  pts.n = n, pts.xyz = xyz, pts.q = q;
+  distributed_evaluation(comm, pts, pot, grad, nullptr);
+}
+
+// Charges and dipoles: the same steps with the moments carried along with the points (ghosts,
+// LET points) and second derivatives at the targets (as evaluate_dipoles).
+template <class K>
+void FmmEvaluator<K>::evaluate_dipoles_distributed(Communicator &comm, std::size_t n, const double *xyz,
+                                                   const double *q, const double *mu, double *pot, double *grad,
+                                                   double *hess)
+{
+  DipoleMode mode{*this};
+  dipole_distributed_evaluation(comm, n, xyz, q, mu, pot, grad, hess);
+}
+
+template <class K>
+void FmmEvaluator<K>::dipole_distributed_evaluation(Communicator &comm, std::size_t n, const double *xyz,
+                                                    const double *q, const double *mu, double *pot, double *grad,
+                                                    double *hess)
+{
+  if (!has_derivs3<K>::value) throw std::invalid_argument("kifmm: this kernel has no third derivatives: no dipoles");
+  hess_ = hess != nullptr;
+  std::vector<double> zq, zmu, g;
+  if (!q) zq.assign(n, 0.0);
+  if (!mu) zmu.assign(3 * n, 0.0);
+  if (!grad && hess) g.resize(3 * n);    // the second derivatives come with the gradient
+  if (hess) std::fill(hess, hess + 6 * n, 0.0);
+  LocalPoints pts;
+  pts.n = n, pts.xyz = xyz, pts.q = q ? q : zq.data(), pts.mu = mu ? mu : zmu.data(), pts.moments = true;
+  distributed_evaluation(comm, pts, pot, grad ? grad : (hess ? g.data() : nullptr), hess);
+  static const double kSorted[3] = {0.0, 0.0, 0.0};
+  if (dip_mu_) dip_mu_ = kSorted;    // (the local moments are gone; their sorted copies stay)
+}
+
+// The sources among this rank's local points (own, ghost and LET points; compacted copies when
+// some are not sources); with moments, dip_mu_ is set to theirs (sorted_copies reads it).
+template <class K>
+std::size_t FmmEvaluator<K>::distributed_sources(const DistributedData &dd, const double *&sxyz, const double *&sq,
+                                                 std::vector<double> &kxyz, std::vector<double> &kq)
+{
+  sxyz = dd.xyz.data(), sq = dd.q.data();
+  if (!dd.moments) return nonzero_sources(dd.q.size(), sxyz, sq, kxyz, kq);
+  static const double kNone[3] = {0.0, 0.0, 0.0};    // (no local points: still dipole mode)
+  const double *smu = dd.mu.empty() ? kNone : dd.mu.data();
+  const std::size_t ns = nonzero_dipole_sources(dd.q.size(), sxyz, sq, smu, kxyz, kq, dip_kmu_);
+  dip_mu_ = smu;
+  return ns;
+}
+
+template <class K>
+void FmmEvaluator<K>::distributed_evaluation(Communicator &comm, const LocalPoints &pts, double *pot, double *grad,
+                                             double *hess)
+{
+  const std::size_t n = pts.n;
+  const double *xyz = pts.xyz;
   stats_ = Stats{};
   stats_.n_targets = n;
   if (pot) std::fill(pot, pot + n, 0.0);
@@ -49,14 +105,18 @@ void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, co
     (this->*boundary_.wrap)(n, sxyz, n, xyz);
   }
   if (grid_) {    // single-level grid (periodic_grid_core.h)
-    evaluate_grid_distributed(comm, n, xyz, q, pot, grad);
+    LocalPoints wrapped = pts;
+    wrapped.xyz = xyz;
+    evaluate_grid_distributed(comm, wrapped, pot, grad, hess);
     return;
   }
   DistributedState st;
   DistributedData &dd = st.dd;
   const DistributedConfig cfg{opt_.top_level, opt_.leaf_size, opt_.max_depth, nsurf_,
                               !level_independent_operators<K>(), opt_.fixed_root ? &fixed : nullptr, opt_.periodic};
-  distributed_setup(comm, cfg, {n, xyz, q}, dd);
+  LocalPoints wrapped = pts;
+  wrapped.xyz = xyz;
+  distributed_setup(comm, cfg, wrapped, dd);
   stats_.t_comm = dd.t_comm;
   stats_.top_level = dd.top.top_level;
   stats_.n_sources = dd.global_sources;
@@ -94,14 +154,14 @@ void FmmEvaluator<K>::evaluate_distributed(Communicator &comm, std::size_t n, co
   // own sources come first in the local source array (periodic: the background moments of this
   // rank's sources, summed over ranks)
   std::size_t own_src = 0;
-  for (std::size_t i = 0; i < n; ++i) own_src += q[i] != 0.0;
+  for (std::size_t i = 0; i < n; ++i) own_src += pts.source(i);
   passes_after_upward(own_src, &comm, pot != nullptr, grad != nullptr);
-  results_to_input_order(n, pot, grad);
+  results_to_input_order(n, pot, grad, hess);
   // a point of nonzero strength meets itself once (not a coincident pair)
   if (stats_.coincident_pairs >= own_src) stats_.coincident_pairs -= own_src;
   stats_.tree_bytes = tree_.bytes() + lists_.bytes() +
       sizeof(double) * (up_equiv_.size() + dn_check_.size() + dn_equiv_.size() + xhat_.capacity() + yhat_.capacity() +
-                        sx_.size() * 4 + tx_.size() * 7 + dd.xyz.capacity() + dd.q.capacity() +
+                        sx_.size() * 4 + tx_.size() * 7 + dd.xyz.capacity() + dd.q.capacity() + dd.mu.capacity() +
                         dd.let_density.capacity() + frontier_buf_.capacity());
   stats_.comm_bytes = comm.bytes_sent();
 }
@@ -135,8 +195,8 @@ template <class K> void FmmEvaluator<K>::distributed_first_tree(Communicator &co
   const double ta = omp_get_wtime();
   std::vector<double> kxyz, kq;
   const std::size_t nl = dd.q.size();
-  const double *sxyz = dd.xyz.data(), *sq = dd.q.data();
-  const std::size_t ns = nonzero_sources(nl, sxyz, sq, kxyz, kq);
+  const double *sxyz, *sq;
+  const std::size_t ns = distributed_sources(dd, sxyz, sq, kxyz, kq);
   build_octree(tree_, dd.root, ns, sxyz, nl, dd.xyz.data(), opt_.leaf_size, opt_.max_depth, &dd.top);
   shape_surfaces(dd.root);
   sorted_copies(ns, sxyz, sq, 0, nullptr);
@@ -174,8 +234,8 @@ template <class K> void FmmEvaluator<K>::distributed_tree(std::size_t n, const d
   const std::size_t nl = dd.q.size();
   stats_.n_ghosts = nl - n;
   const double t2a = omp_get_wtime();
-  const double *sxyz = dd.xyz.data(), *sq = dd.q.data();
-  const std::size_t ns = nonzero_sources(nl, sxyz, sq, kxyz, kq);
+  const double *sxyz, *sq;
+  const std::size_t ns = distributed_sources(dd, sxyz, sq, kxyz, kq);
   build_octree(tree_, dd.root, ns, sxyz, nl, dd.xyz.data(), opt_.leaf_size, opt_.max_depth, &dd.top);
   shape_surfaces(dd.root);
   keep_targets(tree_, n);

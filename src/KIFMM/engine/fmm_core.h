@@ -110,6 +110,8 @@ template <class K> class FmmEvaluator : public Evaluator {
                             double *grad) override;
   void evaluate_dipoles(std::size_t n_src, const double *src_xyz, const double *src_q, const double *src_mu,
                         std::size_t n_trg, const double *trg_xyz, double *pot, double *grad, double *hess) override;
+  void evaluate_dipoles_distributed(Communicator &comm, std::size_t n, const double *xyz, const double *q,
+                                    const double *mu, double *pot, double *grad, double *hess) override;
   const Stats &stats() const override { return stats_; }
   const KernelSpec &kernel() const override { return spec_; }
   const Options &options() const override { return opt_; }
@@ -117,7 +119,7 @@ template <class K> class FmmEvaluator : public Evaluator {
   void set_root_box(const double center[3], const double half_widths[3]) override;
   void periodic_virial_fields(Communicator *comm, std::size_t n, const double *xyz, const double *q, double *offset,
                               double *psi) override;
-  void periodic_dipole_virial_fields(std::size_t n_src, const double *src_xyz, const double *src_q,
+  void periodic_dipole_virial_fields(Communicator *comm, std::size_t n_src, const double *src_xyz, const double *src_q,
                                      const double *src_mu, std::size_t n_trg, const double *trg_xyz,
                                      double *src_offset, double *trg_offset, double *psi, double *chi) override;
 
@@ -160,6 +162,10 @@ template <class K> class FmmEvaluator : public Evaluator {
   // evaluate_dipoles without resetting the dipole spans (they stay for a virial field)
   void dipole_evaluation(std::size_t n_src, const double *src_xyz, const double *src_q, const double *src_mu,
                          std::size_t n_trg, const double *trg_xyz, double *pot, double *grad, double *hess);
+  // the same for evaluate_dipoles_distributed (after it dip_mu_ only marks dipole mode: the
+  // moments are in the sorted spans)
+  void dipole_distributed_evaluation(Communicator &comm, std::size_t n, const double *xyz, const double *q,
+                                     const double *mu, double *pot, double *grad, double *hess);
   std::vector<double> up_equiv_, dn_check_, dn_equiv_, xhat_, yhat_;
   std::vector<char> has_local_;
   std::vector<char> up_mask_;    // distributed: cells whose upward density is computed (empty = all)
@@ -213,7 +219,8 @@ template <class K> class FmmEvaluator : public Evaluator {
   // zero densities, check values and target accumulators for n_trg targets
   void reset_accumulators(std::size_t n_trg);
   // target results (sorted order) back to input order
-  void results_to_input_order(std::size_t n_trg, double *pot, double *grad) const;
+  // (hess: the second derivatives too, dipole mode)
+  void results_to_input_order(std::size_t n_trg, double *pot, double *grad, double *hess = nullptr) const;
   // M2L of the levels l_first .. depth (one FFT kernel per colleague slot)
   void m2l_levels(int l_first);
   void p2l();
@@ -290,6 +297,10 @@ template <class K> class FmmEvaluator : public Evaluator {
   GridBuffer grid_spectra_;                             // spectra of all cells (convolution)
   // distributed evaluation (distributed_core.h)
   struct DistributedState;
+  // evaluate_distributed and evaluate_dipoles_distributed (with moments: dipole mode is set)
+  void distributed_evaluation(Communicator &comm, const LocalPoints &pts, double *pot, double *grad, double *hess);
+  std::size_t distributed_sources(const DistributedData &dd, const double *&sxyz, const double *&sq,
+                                  std::vector<double> &kxyz, std::vector<double> &kq);
   void distributed_first_tree(Communicator &comm, std::size_t n, DistributedState &st);
   void distributed_tree(std::size_t n, const double *xyz, DistributedState &st);
   double distributed_upward(Communicator &comm, DistributedState &st);
@@ -299,8 +310,8 @@ template <class K> class FmmEvaluator : public Evaluator {
   std::vector<int> local_of_top(int n_top_global) const;
   void evaluate_grid(std::size_t ns, const double *sxyz, const double *sq, std::size_t nt, const double *txyz,
                      double *pot, double *grad, bool same_points);
-  void evaluate_grid_distributed(Communicator &comm, std::size_t n, const double *xyz, const double *q, double *pot,
-                                 double *grad);
+  void evaluate_grid_distributed(Communicator &comm, const LocalPoints &pts, double *pot, double *grad,
+                                 double *hess);
   int grid_cell_of(const double *x) const;
   int grid_neighbour(int b, int dx, int dy, int dz, signed char sh[3]) const;
   void grid_bin(std::size_t ns, const double *sxyz, const double *sq, std::size_t nt, const double *txyz,
@@ -539,8 +550,10 @@ template <class K> void FmmEvaluator<K>::reset_accumulators(std::size_t n_trg)
   for (auto &h : th_) h.assign(hess_ ? n_trg : 0, 0.0);
 }
 
-template <class K> void FmmEvaluator<K>::results_to_input_order(std::size_t n_trg, double *pot, double *grad) const
+template <class K>
+void FmmEvaluator<K>::results_to_input_order(std::size_t n_trg, double *pot, double *grad, double *hess) const
 {
+  if (!hess_) hess = nullptr;
 #pragma omp parallel for schedule(static)
   for (std::size_t i = 0; i < n_trg; ++i) {
     const std::size_t j = tree_.trg_order[i];
@@ -550,6 +563,8 @@ template <class K> void FmmEvaluator<K>::results_to_input_order(std::size_t n_tr
       grad[3 * j + 1] = tgy_[i];
       grad[3 * j + 2] = tgz_[i];
     }
+    if (hess)
+      for (int c = 0; c < 6; ++c) hess[6 * j + c] = th_[c][i];
   }
 }
 

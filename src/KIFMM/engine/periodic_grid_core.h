@@ -41,9 +41,11 @@ void FmmEvaluator<K>::evaluate_grid(std::size_t ns, const double *sxyz, const do
 // convolution is done on every rank, the near field one-sided (sources include the ghosts),
 // the background moments and the wrap-correction marginals are summed over ranks.
 template <class K>
-void FmmEvaluator<K>::evaluate_grid_distributed(Communicator &comm, std::size_t n, const double *xyz,
-                                                const double *q, double *pot, double *grad)
+void FmmEvaluator<K>::evaluate_grid_distributed(Communicator &comm, const LocalPoints &pts, double *pot,
+                                                double *grad, double *hess)
 {
+  const std::size_t n = pts.n;
+  const double *xyz = pts.xyz;
   if constexpr (!std::is_same_v<K, LaplaceKernel> && !std::is_same_v<K, YukawaKernel>) {
     throw std::invalid_argument("kifmm: the periodic grid (Options::periodic_grid) is for the Laplace and Yukawa kernels");
   } else {
@@ -59,12 +61,14 @@ void FmmEvaluator<K>::evaluate_grid_distributed(Communicator &comm, std::size_t 
     double tc = omp_get_wtime();
     comm.allgatherv(my_cells, all_cells, counts);
     stats_.t_comm += omp_get_wtime() - tc;
-    // own sources (q != 0) first, then the ghosts
-    std::vector<double> sxyz, sq;
+    // own sources (q != 0 or mu != 0) first, then the ghosts
+    const bool moments = pts.moments;
+    std::vector<double> sxyz, sq, smu;
     for (std::size_t i = 0; i < n; ++i)
-      if (q[i] != 0.0) {
+      if (pts.source(i)) {
         sxyz.insert(sxyz.end(), xyz + 3 * i, xyz + 3 * i + 3);
-        sq.push_back(q[i]);
+        sq.push_back(pts.q[i]);
+        if (moments) smu.insert(smu.end(), pts.mu + 3 * i, pts.mu + 3 * i + 3);
       }
     const std::size_t own = sq.size();
     std::vector<int> own_cell(own);
@@ -82,16 +86,14 @@ void FmmEvaluator<K>::evaluate_grid_distributed(Communicator &comm, std::size_t 
           if (a >= 0) near[a] = 1;
         }
       for (std::size_t j = 0; j < own; ++j)
-        if (near[own_cell[j]]) send[r].insert(send[r].end(), {sxyz[3 * j], sxyz[3 * j + 1], sxyz[3 * j + 2], sq[j]});
+        if (near[own_cell[j]]) pack_point(send[r], sxyz.data(), sq.data(), moments ? smu.data() : nullptr, j);
     }
     tc = omp_get_wtime();
     comm.alltoallv(send, recv);
     stats_.t_comm += omp_get_wtime() - tc;
+    const std::size_t w = point_record_size(moments);
     for (const auto &v : recv)
-      for (std::size_t j = 0; j + 3 < v.size(); j += 4) {
-        sxyz.insert(sxyz.end(), v.begin() + j, v.begin() + j + 3);
-        sq.push_back(v[j + 3]);
-      }
+      for (std::size_t j = 0; j + w <= v.size(); j += w) unpack_point(&v[j], moments, sxyz, sq, smu);
     stats_.n_ghosts = sq.size() - own;
     for (const auto &v : send) stats_.ghost_bytes += v.size() * sizeof(double);
     std::size_t global = own;
@@ -105,10 +107,12 @@ void FmmEvaluator<K>::evaluate_grid_distributed(Communicator &comm, std::size_t 
       stats_.comm_bytes = comm.bytes_sent();
       return;
     }
+    static const double kNone[3] = {0.0, 0.0, 0.0};    // (no local sources: still dipole mode)
+    if (moments) dip_mu_ = smu.empty() ? kNone : smu.data();    // input order of sxyz (grid_bin)
     grid_bin(sq.size(), sxyz.data(), sq.data(), n, xyz, false, own);
     stats_.t_tree = omp_get_wtime() - t0 - stats_.t_comm;
     grid_passes(&comm, own, pot != nullptr, false);
-    results_to_input_order(n, pot, grad);
+    results_to_input_order(n, pot, grad, hess);
     // a point of nonzero strength meets itself once (not a coincident pair)
     if (stats_.coincident_pairs >= own) stats_.coincident_pairs -= own;
     stats_.comm_bytes = comm.bytes_sent();

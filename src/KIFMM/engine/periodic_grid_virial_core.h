@@ -49,22 +49,29 @@ template <class K> void FmmEvaluator<K>::grid_offsets(std::size_t n, const doubl
 }
 
 template <class K>
-void FmmEvaluator<K>::periodic_dipole_virial_fields(std::size_t n_src, const double *src_xyz, const double *src_q,
-                                                    const double *src_mu, std::size_t n_trg, const double *trg_xyz,
-                                                    double *src_offset, double *trg_offset, double *psi, double *chi)
+void FmmEvaluator<K>::periodic_dipole_virial_fields(Communicator *comm, std::size_t n_src, const double *src_xyz,
+                                                    const double *src_q, const double *src_mu, std::size_t n_trg,
+                                                    const double *trg_xyz, double *src_offset, double *trg_offset,
+                                                    double *psi, double *chi)
 {
   check_virial_grid();
+  const bool dist = comm && comm->size() > 1;
+  if (dist && (n_src != n_trg || src_xyz != trg_xyz))
+    throw std::invalid_argument("kifmm: distributed periodic_dipole_virial_fields: the sources must be the targets");
   grid_offsets(n_src, src_xyz, src_offset);
   grid_offsets(n_trg, trg_xyz, trg_offset);
   std::fill(psi, psi + 9 * n_trg, 0.0);
   std::fill(chi, chi + 18 * n_trg, 0.0);
-  if (n_trg == 0) return;
+  if (n_trg == 0 && !dist) return;
   DipoleMode mode{*this};
   std::vector<double> grad(3 * n_trg), hess(6 * n_trg);
-  dipole_evaluation(n_src, src_xyz, src_q, src_mu, n_trg, trg_xyz, nullptr, grad.data(), hess.data());
-  if (stats_.n_sources == 0) return;
+  if (dist)
+    dipole_distributed_evaluation(*comm, n_src, src_xyz, src_q, src_mu, nullptr, grad.data(), hess.data());
+  else
+    dipole_evaluation(n_src, src_xyz, src_q, src_mu, n_trg, trg_xyz, nullptr, grad.data(), hess.data());
+  if (stats_.n_sources == 0) return;    // (distributed: a global count)
   std::vector<double> ps(9 * tx_.size(), 0.0), ch(18 * tx_.size(), 0.0);
-  grid_offset_field(nullptr, ps.data(), ch.data());
+  grid_offset_field(dist ? comm : nullptr, ps.data(), ch.data());
   for (std::size_t i = 0; i < tx_.size(); ++i) {
     std::copy(&ps[9 * i], &ps[9 * i + 9], psi + 9 * tree_.trg_order[i]);
     std::copy(&ch[18 * i], &ch[18 * i + 18], chi + 18 * tree_.trg_order[i]);

@@ -116,6 +116,11 @@ class Evaluator {
   virtual void evaluate_dipoles(std::size_t n_src, const double *src_xyz, const double *src_q,
                                 const double *src_mu, std::size_t n_trg, const double *trg_xyz, double *pot,
                                 double *grad, double *hess) = 0;
+  // The same distributed (collective over comm, as evaluate_distributed): every rank passes its
+  // own points with charges q and moments mu (either may be null: none) and gets pot, grad and
+  // hess (each may be null) of its own points from the points of all ranks.
+  virtual void evaluate_dipoles_distributed(Communicator &comm, std::size_t n, const double *xyz, const double *q,
+                                            const double *mu, double *pot, double *grad, double *hess) = 0;
 
   virtual const Stats &stats() const = 0;
   virtual const KernelSpec &kernel() const = 0;
@@ -136,15 +141,17 @@ class Evaluator {
   // near part from the 26 neighbour cells. One evaluation with q, then that field.
   virtual void periodic_virial_fields(Communicator *comm, std::size_t n, const double *xyz, const double *q,
                                       double *offset, double *psi) = 0;
-  // The same with charges and dipoles (one process; sources and targets may differ, e.g. all
-  // points as sources and a rank's own as targets): offsets of the sources and of the targets,
+  // The same with charges and dipoles (sources and targets may differ, e.g. all points as
+  // sources and a rank's own as targets; see comm below): offsets of the sources and of the targets,
   // psi (9 per target) of the sources' charges and dipoles, and its derivatives
   //   chi[18i + 6a + m] = the second derivatives of sum_{j, n} (D_n)_a Phi_{j,n} at x_i
   // (m = xx yy zz xy xz yz), Phi_{j,n} the potential of source j's image n (charge and dipole).
-  virtual void periodic_dipole_virial_fields(std::size_t n_src, const double *src_xyz, const double *src_q,
-                                             const double *src_mu, std::size_t n_trg, const double *trg_xyz,
-                                             double *src_offset, double *trg_offset, double *psi,
-                                             double *chi) = 0;
+  // With comm (collective, as evaluate_dipoles_distributed): every rank passes its own points as
+  // the sources and the targets (the same arrays).
+  virtual void periodic_dipole_virial_fields(Communicator *comm, std::size_t n_src, const double *src_xyz,
+                                             const double *src_q, const double *src_mu, std::size_t n_trg,
+                                             const double *trg_xyz, double *src_offset, double *trg_offset,
+                                             double *psi, double *chi) = 0;
 };
 
 std::unique_ptr<Evaluator> make_evaluator(const KernelSpec &kernel, const Options &options);
@@ -415,6 +422,11 @@ void dipole_point_virial(Evaluator &ev, std::size_t n_src, const double *src_xyz
                          const double *src_mu, std::size_t n_trg, const double *trg_xyz, const double *trg_q,
                          const double *trg_mu, const double *grad, const double *hess, double prefactor,
                          double *virial, const double center[3]);
+// The same distributed (collective over comm, evaluate_dipoles_distributed): every rank passes
+// its own points, which are its sources and its targets; center the same on every rank.
+void dipole_point_virial(Evaluator &ev, Communicator &comm, std::size_t n, const double *xyz, const double *q,
+                         const double *mu, const double *grad, const double *hess, double prefactor, double *virial,
+                         const double center[3]);
 // The same periodic (p p p or a slab, Laplace, on the grid; dipole_virial.cpp):
 // virial[6k + m] = prefactor / 2 sum_{j, n} (r_n)_a F_b (ab = xx yy zz xy xz yz; r_n = x_k - y_j - n L,
 // F = (q_k d + mu_k . grad d) d_b of the potential of image n of j), from the evaluation's grad and
@@ -425,6 +437,11 @@ void periodic_dipole_point_virial(Evaluator &ev, std::size_t n_src, const double
                                   const double *src_mu, std::size_t n_trg, const double *trg_xyz,
                                   const double *trg_q, const double *trg_mu, const double *grad,
                                   const double *hess, double prefactor, double *virial);
+// The same distributed (collective over comm): every rank passes its own points, which are its
+// sources and its targets.
+void periodic_dipole_point_virial(Evaluator &ev, Communicator &comm, std::size_t n, const double *xyz,
+                                  const double *q, const double *mu, const double *grad, const double *hess,
+                                  double prefactor, double *virial);
 
 // Sampled error check. exact_gradient: the exact gradient at n_trg targets of the sources
 // (open: direct_sum; the evaluator's periodic cell: the Ewald sum of periodic.h); with comm,
@@ -433,11 +450,12 @@ void periodic_dipole_point_virial(Evaluator &ev, std::size_t n_src, const double
 void exact_gradient(const Evaluator &ev, Communicator *comm, std::size_t n_src,
                     const double *src_xyz, const double *src_q, std::size_t n_trg,
                     const double *trg_xyz, double *grad);
-// The same for charges and dipoles (one process): the exact gradient and second derivatives
-// at the targets (open: direct_sum_dipoles; p p p: an Ewald sum with the engine's conventions;
-// a slab or periodic yukawa: the engine at order 14, 1e-10 in the tests).
-void exact_dipole_field(const Evaluator &ev, std::size_t n_src, const double *src_xyz, const double *src_q,
-                        const double *src_mu, std::size_t n_trg, const double *trg_xyz, double *grad, double *hess);
+// The same for charges and dipoles: the exact gradient and second derivatives at the targets
+// (open: direct_sum_dipoles; p p p: an Ewald sum with the engine's conventions; a slab or
+// periodic yukawa: the engine at order 14, 1e-10 in the tests); with comm as exact_gradient.
+void exact_dipole_field(const Evaluator &ev, Communicator *comm, std::size_t n_src, const double *src_xyz,
+                        const double *src_q, const double *src_mu, std::size_t n_trg, const double *trg_xyz,
+                        double *grad, double *hess);
 // `want` of the candidates at random, without replacement (all when want >= their number).
 std::vector<std::size_t> sample_without_replacement(std::vector<std::size_t> candidates,
                                                     std::size_t want, unsigned long long seed);

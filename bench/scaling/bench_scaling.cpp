@@ -1,12 +1,15 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Strong-scaling benchmark of the distributed evaluation (engine level, no LAMMPS):
-//   mpirun -np P bench_scaling N [uniform|periodic|plummer] [order] [reps] [top_level] [choice|leaf=M|grid=K]
+//   mpirun -np P bench_scaling N [uniform|periodic|plummer] [order] [reps] [top_level] [choice|leaf=M|grid=K|-]
+//          [charges|dipoles]
 // Each rank makes only its own points: uniform in its brick of a P-brick decomposition of
 // [-1,1]^3 (as LAMMPS's processor grid; periodic: the same points, [-1,1]^3 is the periodic
 // cell, Laplace with its background term), or, for plummer, the points of a Plummer sphere in its
 // brick (every rank draws the same sequence and keeps its own; N <= 1e6). Prints one JSON line
 // (rank 0): wall time per evaluation (max over ranks), CPU seconds per evaluation (sum over
 // ranks), phases (max over ranks), bytes sent per rank and ghost points per rank (min/avg/max).
+// "dipoles": every point also carries a random dipole moment (evaluate_dipoles_distributed,
+// with second derivatives at the targets).
 #include "fmm_core.h"
 #include "kernels.h"
 #include "mpi_communicator.h"
@@ -18,6 +21,7 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -68,6 +72,7 @@ int main(int argc, char **argv)
   // "leaf=M": that leaf size (octree); "grid=K": the periodic single-level grid of K^3 cells
   const std::string how = argc > 6 ? argv[6] : "";
   const bool choice = how == "choice";
+  const bool dipoles = argc > 7 && std::string(argv[7]) == "dipoles";
   int g[3];
   grid(P, g);
   const int c[3] = {me % g[0], (me / g[0]) % g[1], me / (g[0] * g[1])};
@@ -120,14 +125,22 @@ int main(int argc, char **argv)
   kifmm::FmmEvaluator<kifmm::LaplaceKernel> ev(kifmm::LaplaceKernel{}, spec, o);
   kifmm::MpiCommunicator comm(MPI_COMM_WORLD);
   const std::size_t n = mine.size();
-  std::vector<double> grad(3 * n);
-  ev.evaluate_distributed(comm, n, mine.xyz.data(), mine.q.data(), nullptr, grad.data());    // warm-up (operators)
+  std::vector<double> grad(3 * n), hess(dipoles ? 6 * n : 0), mu(dipoles ? 3 * n : 0);
+  for (std::size_t i = 0; i < mu.size(); ++i) mu[i] = 0.01 * std::sin(1.0 + 7.0 * (double) (i + 13 * me));
+  auto evaluate = [&]() {
+    if (dipoles)
+      ev.evaluate_dipoles_distributed(comm, n, mine.xyz.data(), mine.q.data(), mu.data(), nullptr, grad.data(),
+                                      hess.data());
+    else
+      ev.evaluate_distributed(comm, n, mine.xyz.data(), mine.q.data(), nullptr, grad.data());
+  };
+  evaluate();    // warm-up (operators)
   double wall = 0, cpu = 0;
   double ph[8] = {0, 0, 0, 0, 0, 0, 0, 0};
   for (int r = 0; r < reps; ++r) {
     MPI_Barrier(MPI_COMM_WORLD);
     const double t0 = MPI_Wtime(), c0 = cpu_seconds();
-    ev.evaluate_distributed(comm, n, mine.xyz.data(), mine.q.data(), nullptr, grad.data());
+    evaluate();
     const double t1 = MPI_Wtime(), c1 = cpu_seconds();
     MPI_Barrier(MPI_COMM_WORLD);
     wall += t1 - t0;
@@ -151,7 +164,8 @@ int main(int argc, char **argv)
     fclose(f);
   }
   if (me == 0) {
-    printf("{\"grid\": %d, \"leaf\": %d, ", o.periodic_grid, o.leaf_size);
+    printf("{\"grid\": %d, \"leaf\": %d, \"strengths\": \"%s\", ", o.periodic_grid, o.leaf_size,
+           dipoles ? "dipoles" : "charges");
     printf("\"N\": %zu, \"dist\": \"%s\", \"order\": %d, \"ranks\": %d, \"threads\": %d, \"top_level\": %d, "
            "\"wall\": %.6g, \"cpu_sum\": %.6g, \"bytes_min\": %.0f, \"bytes_avg\": %.0f, \"bytes_max\": %.0f, "
            "\"ghost_bytes_max\": %.0f, \"let_bytes_max\": %.0f, \"let_cells_avg\": %.1f, "

@@ -8,7 +8,8 @@
 # locally essential trees below coarse frontier cells (top level forced to 2 and 3: frontier
 # cells much larger than leaves; KIFMM_BASE_BUILD=dir also runs a build of another commit
 # there, for comparison). Appends JSON lines to bench/scaling/results/scaling.jsonl (one per
-# run, with the load average).
+# run, with the load average). KIFMM_SCALING_ONLY=dipoles: point dipoles against charges only
+# (bytes and ghosts per rank on 1-8 ranks, open, periodic octree and grid).
 set -e
 cd "$(dirname "$0")/../.."
 B=${1:-build}
@@ -24,6 +25,18 @@ run() {
 }
 Ns="1e5"
 [ "$NMAX" = "1e6" ] && Ns="1e5 1e6"
+if [ "${KIFMM_SCALING_ONLY:-}" = "dipoles" ]; then
+  # point dipoles (every point a charge and a moment) against charges only: bytes and ghosts
+  # per rank, open and periodic (octree and the single-level grid)
+  for np in 1 2 4 8; do
+    for what in charges dipoles; do
+      run "$np" 1 "$what" 1e5 uniform 6 1 0 - "$what"
+      run "$np" 1 "$what-periodic" 1e5 periodic 6 1 0 - "$what"
+      run "$np" 1 "$what-periodic-grid" 1e5 periodic 6 1 0 grid=8 "$what"
+    done
+  done
+  exit 0
+fi
 if [ "${KIFMM_SCALING_ONLY:-}" = "let" ]; then
   commit=$(git rev-parse --short HEAD)
   for N in $Ns; do

@@ -177,8 +177,8 @@ TEST(PeriodicBox, GridWithOneOrTwoCellsAcrossAThinSide)
     kifmm::grid_cells_per_axis(cs.k, cs.shape, kd);
     for (int d = 0; d < 3; ++d) ASSERT_EQ(kd[d], cs.cells[d]);
     ASSERT_TRUE(kifmm::grid_fits_cell(8, cs.k, cs.shape)) << cs.k;
-    const Points p = neutral(box_points(1500, 52, c, 2.0, cs.shape));
-    const Points t = box_points(300, 53, c, 2.0, cs.shape);
+    const Points p = neutral(box_points(800, 52, c, 2.0, cs.shape));
+    const Points t = box_points(200, 53, c, 2.0, cs.shape);
     for (const KernelSpec &ker : {KernelSpec{}, KernelSpec{KernelType::Yukawa, 2.0}}) {
       kifmm::Options o = box_options(8, 40, c, 2.0, cs.shape);
       o.periodic_grid = cs.k;

@@ -563,6 +563,21 @@ std::vector<double> some_moments(Points &p, unsigned seed)
   return mu;
 }
 
+// the input indices of the points rank `me` owns, and rows (width values per point) of an array
+std::vector<std::size_t> own_indices(const std::vector<int> &owner, int me)
+{
+  std::vector<std::size_t> idx;
+  for (std::size_t i = 0; i < owner.size(); ++i)
+    if (owner[i] == me) idx.push_back(i);
+  return idx;
+}
+std::vector<double> rows(const std::vector<double> &v, std::size_t width, const std::vector<std::size_t> &idx)
+{
+  std::vector<double> out;
+  for (std::size_t i : idx) out.insert(out.end(), v.begin() + width * i, v.begin() + width * (i + 1));
+  return out;
+}
+
 struct DipoleResult {
   double pot = 0, grad = 0, hess = 0;    // max abs difference / max abs serial value, all ranks
 };
@@ -590,16 +605,8 @@ DipoleResult compare_dipoles(const K &k, const kifmm::KernelSpec &spec, const Po
   const double *q = q_null ? nullptr : all.q.data();
   std::vector<double> ps(n), gs(3 * n), hs(6 * n);
   serial.evaluate_dipoles(n, all.xyz.data(), q, mu.data(), n, all.xyz.data(), ps.data(), gs.data(), hs.data());
-  std::vector<double> xyz, qm, mm;
-  std::vector<std::size_t> idx;
-  const std::vector<int> owner = part(all, np);
-  for (std::size_t i = 0; i < n; ++i)
-    if (owner[i] == me) {
-      idx.push_back(i);
-      xyz.insert(xyz.end(), &all.xyz[3 * i], &all.xyz[3 * i] + 3);
-      qm.push_back(all.q[i]);
-      mm.insert(mm.end(), &mu[3 * i], &mu[3 * i] + 3);
-    }
+  const std::vector<std::size_t> idx = own_indices(part(all, np), me);
+  const std::vector<double> xyz = rows(all.xyz, 3, idx), qm = rows(all.q, 1, idx), mm = rows(mu, 3, idx);
   const std::size_t m = idx.size();
   std::vector<double> pd(m), gd(3 * m), hd(6 * m);
   kifmm::MpiCommunicator comm(MPI_COMM_WORLD);
@@ -709,18 +716,9 @@ TEST(Distributed, DipoleVirialEqualsSerial)
     else
       kifmm::dipole_point_virial(*serial, n, all.xyz.data(), all.q.data(), mu.data(), n, all.xyz.data(), all.q.data(),
                                  mu.data(), gs.data(), hs.data(), 1.0, ws.data(), center);
-    std::vector<double> xyz, q, m, g, h;
-    std::vector<std::size_t> idx;
-    const std::vector<int> owner = random_owner(all, np);
-    for (std::size_t i = 0; i < n; ++i)
-      if (owner[i] == me) {
-        idx.push_back(i);
-        xyz.insert(xyz.end(), &all.xyz[3 * i], &all.xyz[3 * i] + 3);
-        q.push_back(all.q[i]);
-        m.insert(m.end(), &mu[3 * i], &mu[3 * i] + 3);
-        g.insert(g.end(), &gs[3 * i], &gs[3 * i] + 3);
-        h.insert(h.end(), &hs[6 * i], &hs[6 * i] + 6);
-      }
+    const std::vector<std::size_t> idx = own_indices(random_owner(all, np), me);
+    const std::vector<double> xyz = rows(all.xyz, 3, idx), q = rows(all.q, 1, idx), m = rows(mu, 3, idx),
+                              g = rows(gs, 3, idx), h = rows(hs, 6, idx);
     const std::size_t k = idx.size();
     std::vector<double> wd(6 * k);
     kifmm::MpiCommunicator comm(MPI_COMM_WORLD);

@@ -64,6 +64,30 @@ void point_virial(Evaluator &ev, Communicator *comm, std::size_t n, const double
   }
 }
 
+namespace {
+
+// Collective: the targets of all ranks on every rank (few); sum(m, xyz, out) puts this rank's
+// sources' values at m targets into out (width values per target, laid out as the caller's sum
+// does), and the values are added over the ranks (the references are linear in the sources).
+// Returns the values of all targets; first: the index of this rank's first target.
+template <class Sum>
+std::vector<double> summed_at_all_targets(Communicator &comm, std::size_t n_trg, const double *trg_xyz,
+                                          std::size_t width, const Sum &sum, std::size_t &first)
+{
+  std::vector<double> mine(trg_xyz, trg_xyz + 3 * n_trg), all;
+  std::vector<int> counts;
+  comm.allgatherv(mine, all, counts);
+  first = 0;
+  for (int r = 0; r < comm.rank(); ++r) first += (std::size_t) counts[r] / 3;
+  const std::size_t m = all.size() / 3;
+  std::vector<double> out(width * m, 0.0);
+  sum(m, all.data(), out.data());
+  if (!out.empty()) comm.allreduce_sum(out.data(), out.size());
+  return out;
+}
+
+}    // namespace
+
 void exact_gradient(const Evaluator &ev, Communicator *comm, std::size_t n_src,
                     const double *src_xyz, const double *src_q, std::size_t n_trg,
                     const double *trg_xyz, double *grad)
@@ -86,17 +110,9 @@ void exact_gradient(const Evaluator &ev, Communicator *comm, std::size_t n_src,
     sum(n_trg, trg_xyz, grad);
     return;
   }
-  // the targets of all ranks on every rank (few); each rank sums its own sources on them (the
-  // references are linear in the sources), then the sums are added over the ranks
-  std::vector<double> mine(trg_xyz, trg_xyz + 3 * n_trg), all;
-  std::vector<int> counts;
-  comm->allgatherv(mine, all, counts);
-  std::size_t offset = 0;
-  for (int r = 0; r < comm->rank(); ++r) offset += (std::size_t) counts[r];
-  std::vector<double> g(all.size(), 0.0);
-  sum(all.size() / 3, all.data(), g.data());
-  if (!g.empty()) comm->allreduce_sum(g.data(), g.size());
-  std::copy(g.begin() + offset, g.begin() + offset + 3 * n_trg, grad);
+  std::size_t first = 0;
+  const std::vector<double> g = summed_at_all_targets(*comm, n_trg, trg_xyz, 3, sum, first);
+  std::copy(g.begin() + 3 * first, g.begin() + 3 * (first + n_trg), grad);
 }
 
 void exact_dipole_field(const Evaluator &ev, Communicator *comm, std::size_t n_src, const double *src_xyz,
@@ -125,19 +141,13 @@ void exact_dipole_field(const Evaluator &ev, Communicator *comm, std::size_t n_s
     sum(n_trg, trg_xyz, grad, hess);
     return;
   }
-  // the targets of all ranks on every rank (few); each rank sums its own sources on them (the
-  // references are linear in the sources), then the sums are added over the ranks
-  std::vector<double> mine(trg_xyz, trg_xyz + 3 * n_trg), all;
-  std::vector<int> counts;
-  comm->allgatherv(mine, all, counts);
-  std::size_t offset = 0;
-  for (int r = 0; r < comm->rank(); ++r) offset += (std::size_t) counts[r];
-  const std::size_t m = all.size() / 3;
-  std::vector<double> gh(9 * m, 0.0);    // gradients, then second derivatives
-  sum(m, all.data(), gh.data(), gh.data() + 3 * m);
-  if (!gh.empty()) comm->allreduce_sum(gh.data(), gh.size());
-  std::copy(gh.begin() + offset, gh.begin() + offset + 3 * n_trg, grad);
-  if (hess) std::copy(gh.begin() + 3 * m + 2 * offset, gh.begin() + 3 * m + 2 * offset + 6 * n_trg, hess);
+  // (the gradients of all targets, then their second derivatives)
+  auto both = [&](std::size_t m, const double *t, double *out) { sum(m, t, out, out + 3 * m); };
+  std::size_t first = 0;
+  const std::vector<double> gh = summed_at_all_targets(*comm, n_trg, trg_xyz, 9, both, first);
+  const std::size_t m = gh.size() / 9;
+  std::copy(gh.begin() + 3 * first, gh.begin() + 3 * (first + n_trg), grad);
+  if (hess) std::copy(gh.begin() + 3 * m + 6 * first, gh.begin() + 3 * m + 6 * (first + n_trg), hess);
 }
 
 std::vector<std::size_t> sample_without_replacement(std::vector<std::size_t> candidates,

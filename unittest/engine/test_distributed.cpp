@@ -84,13 +84,10 @@ struct Result {
 };
 
 // periodic_half > 0: periodic boundaries, the cell [-periodic_half, periodic_half]^3 (shape:
-// the rectangular cell of half-widths periodic_half * shape[d])
-template <class K>
-Result compare(const K &k, const kifmm::KernelSpec &spec, const Points &all, const Partition &part, int top_level,
-               int leaf = 24, int order = 6, double periodic_half = 0.0, int grid = 0, const double *shape = nullptr,
-               int periodic_dims = 3)
+// the rectangular cell of half-widths periodic_half * shape[d]); grid > 0: the single-level grid
+kifmm::Options test_options(int order, int leaf, int top_level, double periodic_half, int grid,
+                            const double *shape = nullptr, int periodic_dims = 3)
 {
-  const int me = rank_of_world(), np = size_of_world();
   kifmm::Options o;
   o.order = order;
   o.leaf_size = leaf;
@@ -104,6 +101,16 @@ Result compare(const K &k, const kifmm::KernelSpec &spec, const Points &all, con
       for (int d = 0; d < 3; ++d) o.root_shape[d] = shape[d];
     o.periodic_dims = periodic_dims;
   }
+  return o;
+}
+
+template <class K>
+Result compare(const K &k, const kifmm::KernelSpec &spec, const Points &all, const Partition &part, int top_level,
+               int leaf = 24, int order = 6, double periodic_half = 0.0, int grid = 0, const double *shape = nullptr,
+               int periodic_dims = 3)
+{
+  const int me = rank_of_world(), np = size_of_world();
+  const kifmm::Options o = test_options(order, leaf, top_level, periodic_half, grid, shape, periodic_dims);
   kifmm::FmmEvaluator<K> serial(k, spec, o), dist(k, spec, o);
   const std::size_t n = all.size();
   std::vector<double> ps(n), gs(3 * n);
@@ -590,16 +597,7 @@ DipoleResult compare_dipoles(const K &k, const kifmm::KernelSpec &spec, const Po
                              double periodic_half, int grid, bool q_null = false)
 {
   const int me = rank_of_world(), np = size_of_world();
-  kifmm::Options o;
-  o.order = 6;
-  o.leaf_size = leaf;
-  o.top_level = top_level;
-  if (periodic_half > 0) {
-    o.periodic = true;
-    o.fixed_root = true;
-    o.root_half_width = periodic_half;
-    o.periodic_grid = grid;
-  }
+  const kifmm::Options o = test_options(6, leaf, top_level, periodic_half, grid);
   kifmm::FmmEvaluator<K> serial(k, spec, o), dist(k, spec, o);
   const std::size_t n = all.size();
   const double *q = q_null ? nullptr : all.q.data();
@@ -695,15 +693,7 @@ TEST(Distributed, DipoleVirialEqualsSerial)
   for (bool periodic : {false, true}) {
     Points all = uniform_cube(1200, 57);
     const std::vector<double> mu = some_moments(all, 58);
-    kifmm::Options o;
-    o.order = 6;
-    o.leaf_size = 24;
-    if (periodic) {
-      o.periodic = true;
-      o.fixed_root = true;
-      o.root_half_width = 1.0;
-      o.periodic_grid = 4;
-    }
+    const kifmm::Options o = test_options(6, 24, 0, periodic ? 1.0 : 0.0, 4);
     const std::size_t n = all.size();
     const double center[3] = {0.0, 0.0, 0.0};
     auto serial = kifmm::make_evaluator(kifmm::KernelSpec{}, o), dist = kifmm::make_evaluator(kifmm::KernelSpec{}, o);

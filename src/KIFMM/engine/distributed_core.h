@@ -63,8 +63,7 @@ void FmmEvaluator<K>::dipole_distributed_evaluation(Communicator &comm, std::siz
   LocalPoints pts;
   pts.n = n, pts.xyz = xyz, pts.q = q ? q : zq.data(), pts.mu = mu ? mu : zmu.data(), pts.moments = true;
   distributed_evaluation(comm, pts, pot, grad ? grad : (hess ? g.data() : nullptr), hess);
-  static const double kSorted[3] = {0.0, 0.0, 0.0};
-  if (dip_mu_) dip_mu_ = kSorted;    // (the local moments are gone; their sorted copies stay)
+  if (dip_mu_) dip_mu_ = kMomentsElsewhere;    // (the local moments are gone; their sorted copies stay)
 }
 
 // The sources among this rank's local points (own, ghost and LET points; compacted copies when
@@ -75,8 +74,7 @@ std::size_t FmmEvaluator<K>::distributed_sources(const DistributedData &dd, cons
 {
   sxyz = dd.xyz.data(), sq = dd.q.data();
   if (!dd.moments) return nonzero_sources(dd.q.size(), sxyz, sq, kxyz, kq);
-  static const double kNone[3] = {0.0, 0.0, 0.0};    // (no local points: still dipole mode)
-  const double *smu = dd.mu.empty() ? kNone : dd.mu.data();
+  const double *smu = dd.mu.empty() ? kMomentsElsewhere : dd.mu.data();
   const std::size_t ns = nonzero_dipole_sources(dd.q.size(), sxyz, sq, smu, kxyz, kq, dip_kmu_);
   dip_mu_ = smu;
   return ns;

@@ -90,6 +90,10 @@ inline std::size_t nonzero_dipole_sources(std::size_t n, const double *&xyz, con
   return kq.size();
 }
 
+// dip_mu_ of a dipole evaluation whose moments are not (or no longer) in an input-order array:
+// this rank has no local points, or their moments are already in the sorted spans
+inline constexpr double kMomentsElsewhere[3] = {0.0, 0.0, 0.0};
+
 template <class K> class FmmEvaluator : public Evaluator {
  public:
   FmmEvaluator(const K &k, const KernelSpec &spec, const Options &opt) : k_(k), spec_(spec), opt_(opt)
@@ -942,13 +946,7 @@ void FmmEvaluator<K>::dipole_evaluation(std::size_t n_src, const double *src_xyz
   (this->*boundary_.wrap)(ns, sxyz, n_trg, trg_xyz);    // periodic: into the cell (moments unchanged)
   if (grid_) evaluate_grid(ns, sxyz, sq, n_trg, trg_xyz, pot, gr, same_arrays);
   else evaluate_tree(t, ns, sxyz, sq, n_trg, trg_xyz, pot, gr);
-  if (hess) {
-#pragma omp parallel for schedule(static)
-    for (std::size_t i = 0; i < n_trg; ++i) {
-      const std::size_t j = tree_.trg_order[i];
-      for (int c = 0; c < 6; ++c) hess[6 * j + c] = th_[c][i];
-    }
-  }
+  if (hess) results_to_input_order(n_trg, nullptr, nullptr, hess);
   if (same_arrays && stats_.coincident_pairs >= ns) stats_.coincident_pairs -= ns;    // self pairs
 }
 

@@ -107,8 +107,7 @@ void FmmEvaluator<K>::evaluate_grid_distributed(Communicator &comm, const LocalP
       stats_.comm_bytes = comm.bytes_sent();
       return;
     }
-    static const double kNone[3] = {0.0, 0.0, 0.0};    // (no local sources: still dipole mode)
-    if (moments) dip_mu_ = smu.empty() ? kNone : smu.data();    // input order of sxyz (grid_bin)
+    if (moments) dip_mu_ = smu.empty() ? kMomentsElsewhere : smu.data();    // input order of sxyz (grid_bin)
     grid_bin(sq.size(), sxyz.data(), sq.data(), n, xyz, false, own);
     stats_.t_tree = omp_get_wtime() - t0 - stats_.t_comm;
     grid_passes(&comm, own, pot != nullptr, false);

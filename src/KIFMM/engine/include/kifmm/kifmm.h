@@ -376,6 +376,51 @@ PolarizationSolve solve_induced_dipoles(std::size_t n, const double *alpha, cons
                                         const std::function<void(const double *mu, double *e)> &field,
                                         const std::function<double(double)> &sum, double tolerance,
                                         int max_iterations, double *mu);
+
+// ---- dielectric spheres: surface polarization by a boundary integral equation
+//      (dielectric_spheres.cpp)
+
+// n spheres (centres, radii, permittivity eps_ratio = eps_in / eps_out each) in a medium of
+// permittivity eps_out and a uniform external field E0: the surface charge density sigma of
+// each sphere (bound charge in units of eps_out: the potential is
+// phi(x) = -E0 . x + sum_spheres int sigma(y) / (4 pi |x - y|) dS_y) solves the second-kind
+// equation of the normal field's jump at a dielectric interface (Greengard and Moura 1994)
+//   sigma(x) - 2 lambda n(x) . E_pv[sigma](x) = 2 lambda n(x) . E0,
+//   lambda = (eps_ratio - 1) / (eps_ratio + 1),
+// E_pv the principal-value field of all sigma on the surfaces. Each sphere carries 2 (L + 1)^2
+// nodes (L = degree; sphere_grid.h), sigma is taken of degree <= L on each sphere:
+//   own sphere    : exact, the principal-value normal field of Y_lm is Y_lm / (2 (2l + 1));
+//   other spheres : the nodes as point charges through the evaluator (FMM, Laplace) or the
+//                   direct sum; nodes closer to another sphere than 4 pi a / (L + 1) of its
+//                   radius a (touching or nearly touching spheres) take that sphere's field
+//                   from its sigma interpolated by its harmonics on a quadrature graded
+//                   towards the node's nearest surface point (precomputed once per solve).
+// Solved by GMRES from the isolated spheres' solution 3 (eps - 1) / (eps + 2) E0 . n. Forces,
+// torques and dipoles are those of the surface charges in the field of everything else
+// (E0 and the other spheres): F_i = int_i sigma E dS, in units of eps_out (times eps_0 eps_out
+// in SI; times epsilon / (4 pi) in LAMMPS's Gaussian-like real/metal units where a unit
+// charge's potential is qqrd2e q / r).
+struct DielectricSphereOptions {
+  int degree = 12;             // L: harmonics per sphere up to this degree (nodes 2 (L + 1)^2)
+  double tolerance = 1e-8;     // GMRES: relative residual
+  int max_iterations = 300;
+};
+struct DielectricSphereSolve {
+  int iterations = 0, evaluations = 0;    // GMRES steps; field evaluations (FMM or direct)
+  double residual = 0;
+  bool converged = false;
+  std::size_t nodes_per_sphere = 0, near_rows = 0;    // near_rows: nodes with a graded quadrature
+  std::vector<double> node_xyz;    // 3 per node, sphere-major
+  std::vector<double> node_area;   // surface element of each node (sum: 4 pi a^2 per sphere)
+  std::vector<double> sigma;       // surface charge density at the nodes (units of eps_out)
+  std::vector<double> force, torque, dipole;    // 3 per sphere (torque and dipole about the centre)
+};
+// ev: a Laplace evaluator (its order sets the accuracy of the far field), or null for the
+// direct sum. Throws std::invalid_argument on bad input (overlapping spheres, radius or
+// eps_ratio not positive, degree < 1, an evaluator of another kernel).
+DielectricSphereSolve polarize_dielectric_spheres(Evaluator *ev, std::size_t n, const double *center,
+                                                  const double *radius, const double *eps_ratio,
+                                                  const double field[3], const DielectricSphereOptions &options);
 }    // namespace kifmm
 
 namespace kifmm {

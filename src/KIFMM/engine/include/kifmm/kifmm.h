@@ -388,13 +388,19 @@ PolarizationSolve solve_induced_dipoles(std::size_t n, const double *alpha, cons
 //   sigma(x) - 2 lambda n(x) . E_pv[sigma](x) = 2 lambda n(x) . E0,
 //   lambda = (eps_ratio - 1) / (eps_ratio + 1),
 // E_pv the principal-value field of all sigma on the surfaces. Each sphere carries 2 (L + 1)^2
-// nodes (L = degree; sphere_grid.h), sigma is taken of degree <= L on each sphere:
-//   own sphere    : exact, the principal-value normal field of Y_lm is Y_lm / (2 (2l + 1));
+// nodes (L = degree; sphere_grid.h) with its pole towards its nearest neighbour; a sphere with
+// exactly one close neighbour has them drawn towards the contact by a conformal map (options:
+// contact_refinement), which keeps the own-sphere operator exact:
+//   own sphere    : sigma lambda^(3/2) of degree <= L (lambda the map's length scale), whose
+//                   principal-value normal field is diagonal in the harmonics (Y_lm / (2 (2l + 1))
+//                   on the plain grid);
 //   other spheres : the nodes as point charges through the evaluator (FMM, Laplace) or the
 //                   direct sum; nodes closer to another sphere than 4 pi a / (L + 1) of its
 //                   radius a (touching or nearly touching spheres) take that sphere's field
 //                   from its sigma interpolated by its harmonics on a quadrature graded
 //                   towards the node's nearest surface point (precomputed once per solve).
+// Two touching spheres of permittivity ratio 10: force within 0.4 % of the exact value at
+// L = 12, 0.04 % at L = 16 (a gap of 0.05 radii: 1e-4 and 1e-7).
 // Solved by GMRES from the isolated spheres' solution 3 (eps - 1) / (eps + 2) E0 . n. Forces,
 // torques and dipoles are those of the surface charges in the field of everything else
 // (E0 and the other spheres): F_i = int_i sigma E dS, in units of eps_out (times eps_0 eps_out
@@ -404,6 +410,10 @@ struct DielectricSphereOptions {
   int degree = 12;             // L: harmonics per sphere up to this degree (nodes 2 (L + 1)^2)
   double tolerance = 1e-8;     // GMRES: relative residual
   int max_iterations = 300;
+  // s: the grid of a sphere with exactly one close neighbour is drawn towards the contact by
+  // the factor s (nodes s times denser there, s times sparser on the far side); 0: chosen from
+  // the gap (2 to 4); 1: none
+  double contact_refinement = 0.0;
 };
 struct DielectricSphereSolve {
   int iterations = 0, evaluations = 0;    // GMRES steps; field evaluations (FMM or direct)

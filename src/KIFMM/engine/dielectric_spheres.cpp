@@ -9,6 +9,7 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <map>
 #include <stdexcept>
@@ -23,7 +24,7 @@ constexpr double kPi = 3.14159265358979323846;
 // a node takes the graded quadrature for another sphere when it is closer to that sphere's
 // surface than this many node spacings (pi a / (L + 1)) of it; farther, the nodes as point
 // charges are accurate to about 1e-6 of the field (bench/dielectric/results)
-constexpr double kNearSpacings = 4.0;
+constexpr double kNearSpacings = 2.5;
 
 using Matrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
@@ -128,9 +129,9 @@ void frame_with_pole(const double p[3], double R[9])
 // Field at x of sphere S's density (g of degree <= L) minus that of its nodes as point charges,
 // as a 3 x nodes matrix acting on the node values of sigma. The density is integrated on a
 // quadrature in polar coordinates about the surface point nearest to x (x lies on that axis,
-// so the kernel depends on the polar angle only): Gauss-Legendre panels growing geometrically
-// from the distance of x to the surface up to pi / 16, then of width pi / 16; the trapezoidal
-// rule in the azimuth.
+// so the kernel depends on the polar angle only): 12-point Gauss-Legendre panels growing
+// geometrically from the distance of x to the surface up to pi / 12, then of width pi / 12;
+// the trapezoidal rule in the azimuth.
 Matrix near_correction(const SphereGrid &g, const Sphere &S, const double x[3])
 {
   const int L = g.degree, nh = harmonic_count(L);
@@ -143,13 +144,13 @@ Matrix near_correction(const SphereGrid &g, const Sphere &S, const double x[3])
   frame_with_pole(u, F);
 
   std::vector<double> edges{0.0};
-  double w = std::min(kPi / 16, std::max(1e-9, (rho - a) / a));
+  double w = std::min(kPi / 12, std::max(1e-9, (rho - a) / a));
   while (edges.back() < kPi) {
     edges.push_back(std::min(kPi, edges.back() + w));
-    w = std::min(kPi / 16, 2 * w);
+    w = std::min(kPi / 12, 2 * w);
   }
   std::vector<double> t, wt;
-  gauss_legendre(16, t, wt);
+  gauss_legendre(12, t, wt);
   const int nchi = 2 * L + 8;
   Matrix V = Matrix::Zero(3, nh);
   std::vector<double> y(nh);
@@ -177,7 +178,7 @@ Matrix near_correction(const SphereGrid &g, const Sphere &S, const double x[3])
           v[0] = own[0], v[1] = own[1], v[2] = own[2];
         }
         const double k = wpsi / (r2 * std::sqrt(r2) * lv * std::sqrt(lv));
-        real_harmonics(L, v, y.data());
+        real_harmonics(g.table, v, y.data());
         for (int d = 0; d < 3; ++d)
           for (int hh = 0; hh < nh; ++hh) V(d, hh) += k * r[d] * y[hh];
       }
@@ -258,6 +259,8 @@ DielectricSphereSolve polarize_dielectric_spheres(Evaluator *ev, std::size_t n, 
                                                   const double field[3], const DielectricSphereOptions &opt)
 {
   check_input(ev, n, center, radius, eps, opt);
+  using clock = std::chrono::steady_clock;
+  const auto t0 = clock::now();
   const SphereGrid g(opt.degree);
   const std::size_t nn = g.nodes, N = n * nn;
   double rmax = 0;
@@ -332,6 +335,8 @@ DielectricSphereSolve polarize_dielectric_spheres(Evaluator *ev, std::size_t n, 
   for (std::size_t r = 0; r < near.size(); ++r)
     near[r].R = near_correction(g, S[near[r].sphere], &out.node_xyz[3 * near[r].node]);
   out.near_rows = near.size();
+  const auto t1 = clock::now();
+  out.seconds_setup = std::chrono::duration<double>(t1 - t0).count();
 
   // the field of all surface charges at the nodes (each node's own sphere as point charges,
   // which apply() replaces by the exact operator), plus the near corrections: e (3 per node)
@@ -403,6 +408,7 @@ DielectricSphereSolve polarize_dielectric_spheres(Evaluator *ev, std::size_t n, 
       out.torque[3 * i + 2] += qa * (r[0] * E[1] - r[1] * E[0]);
     }
   }
+  out.seconds_solve = std::chrono::duration<double>(clock::now() - t1).count();
   return out;
 }
 

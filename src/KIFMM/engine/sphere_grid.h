@@ -18,7 +18,14 @@ namespace kifmm {
 inline int harmonic_count(int degree) { return (degree + 1) * (degree + 1); }
 inline int harmonic_index(int l, int m) { return l * l + l + m; }
 
+// Coefficients of the recurrences of the normalized associated Legendre functions up to a degree
+struct HarmonicsTable {
+  int degree = 0;
+  std::vector<double> a, b, diag;    // a, b at harmonic_index(l, m); diag[m]: Pbar_m^m's factor
+  explicit HarmonicsTable(int degree);
+};
 // y[harmonic_index(l, m)] = Y_lm(u) for l <= degree; u a unit vector.
+void real_harmonics(const HarmonicsTable &t, const double u[3], double *y);
 void real_harmonics(int degree, const double u[3], double *y);
 
 // Gauss-Legendre nodes and weights on [-1, 1] (n >= 1).
@@ -31,6 +38,7 @@ struct SphereGrid {
   std::vector<double> weight;       // quadrature weights on the unit sphere (sum 4 pi)
   std::vector<double> harmonics;    // harmonics[k * nh + h] = Y_h(dir_k), nh = harmonic_count
   std::vector<double> transform;    // transform[h * nodes + k] = w_k Y_h(dir_k)
+  HarmonicsTable table;
   explicit SphereGrid(int degree);
 };
 

@@ -420,6 +420,7 @@ struct DielectricSphereSolve {
   double residual = 0;
   bool converged = false;
   std::size_t nodes_per_sphere = 0, near_rows = 0;    // near_rows: nodes with a graded quadrature
+  double seconds_setup = 0, seconds_solve = 0;        // wall clock: grids and near rows; GMRES and forces
   std::vector<double> node_xyz;    // 3 per node, sphere-major
   std::vector<double> node_area;   // surface element of each node (sum: 4 pi a^2 per sphere)
   std::vector<double> sigma;       // surface charge density at the nodes (units of eps_out)

@@ -3,6 +3,7 @@
 
 #include "style_maps.h"
 
+#include "fix_kifmm_dielectric.h"
 #include "fix_kifmm_polarize.h"
 #include "fix_kifmm_stride.h"
 #include "fix_clump_rigid.h"
@@ -34,6 +35,10 @@ void *make_fix_kifmm_polarize(void *lmp, int narg, char **arg)
 {
   return new FixKIFMMPolarize(static_cast<LAMMPS *>(lmp), narg, arg);
 }
+void *make_fix_kifmm_dielectric(void *lmp, int narg, char **arg)
+{
+  return new FixKIFMMDielectric(static_cast<LAMMPS *>(lmp), narg, arg);
+}
 void *make_fix_clump_rigid(void *lmp, int narg, char **arg)
 {
   return new FixClumpRigid(static_cast<LAMMPS *>(lmp), narg, arg);
@@ -42,7 +47,8 @@ void *make_fix_clump_rigid(void *lmp, int narg, char **arg)
 
 const std::vector<lammpsplugin_t> &package_styles()
 {
-  // The package's styles (kspace kifmm, fix kifmm/stride, fix kifmm/polarize, fix clump/rigid);
+  // The package's styles (kspace kifmm, fix kifmm/stride, fix kifmm/polarize, fix
+  // kifmm/dielectric, fix clump/rigid);
   // see src/KIFMM and src/RIGID_CLUMP.
   static const std::vector<lammpsplugin_t> styles = [] {
     std::vector<lammpsplugin_t> v;
@@ -65,6 +71,8 @@ const std::vector<lammpsplugin_t> &package_styles()
         .creator.v2 = &make_fix_kifmm_stride;
     add("fix", "kifmm/polarize", "induced point dipoles of polarizable atoms, solved by kspace kifmm")
         .creator.v2 = &make_fix_kifmm_polarize;
+    add("fix", "kifmm/dielectric", "dielectric spheres in a uniform field by a boundary integral equation")
+        .creator.v2 = &make_fix_kifmm_dielectric;
     add("fix", "clump/rigid", "rigid clumps of spherical pebbles (union mass, wraps rigid/small)")
         .creator.v2 = &make_fix_clump_rigid;
     return v;

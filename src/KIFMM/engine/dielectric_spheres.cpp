@@ -207,14 +207,16 @@ struct NearRow {
 };
 
 void check_input(Evaluator *ev, std::size_t n, const double *center, const double *radius,
-                 const double *eps, const DielectricSphereOptions &opt)
+                 const double *eps, const double field[3], const DielectricSphereOptions &opt)
 {
   if (opt.degree < 1) throw std::invalid_argument("dielectric spheres: degree must be at least 1");
+  if (!(std::isfinite(field[0]) && std::isfinite(field[1]) && std::isfinite(field[2])))
+    throw std::invalid_argument("dielectric spheres: the field is not finite");
   if (ev && ev->kernel().type != KernelType::Laplace)
     throw std::invalid_argument("dielectric spheres: the evaluator must have the Laplace kernel");
   for (std::size_t i = 0; i < n; ++i) {
-    if (!(radius[i] > 0)) throw std::invalid_argument("dielectric spheres: radius of sphere " + std::to_string(i) + " is not positive");
-    if (!(eps[i] > 0)) throw std::invalid_argument("dielectric spheres: permittivity ratio of sphere " + std::to_string(i) + " is not positive");
+    if (!(radius[i] > 0 && std::isfinite(radius[i]))) throw std::invalid_argument("dielectric spheres: radius of sphere " + std::to_string(i) + " is not positive and finite");
+    if (!(eps[i] > 0 && std::isfinite(eps[i]))) throw std::invalid_argument("dielectric spheres: permittivity ratio of sphere " + std::to_string(i) + " is not positive and finite");
     for (int d = 0; d < 3; ++d)
       if (!std::isfinite(center[3 * i + d])) throw std::invalid_argument("dielectric spheres: centre of sphere " + std::to_string(i) + " is not finite");
   }
@@ -254,24 +256,13 @@ std::vector<std::pair<std::size_t, std::size_t>> close_pairs(std::size_t n, cons
   return out;
 }
 
-}    // namespace
-
-DielectricSphereSolve polarize_dielectric_spheres(Evaluator *ev, std::size_t n, const double *center,
-                                                  const double *radius, const double *eps,
-                                                  const double field[3], const DielectricSphereOptions &opt)
+// The spheres' frames and grids: the pole towards the nearest close neighbour; a sphere with
+// exactly one close neighbour takes the grid drawn towards it (factor from the gap, or given).
+// grids: one per factor (their own-sphere operators), which the spheres point to.
+std::vector<Sphere> place_spheres(const SphereGrid &g, std::size_t n, const double *center, const double *radius,
+                                  const std::vector<std::pair<std::size_t, std::size_t>> &pairs, double refinement,
+                                  std::map<double, MappedGrid> &grids)
 {
-  check_input(ev, n, center, radius, eps, opt);
-  using clock = std::chrono::steady_clock;
-  const auto t0 = clock::now();
-  const SphereGrid g(opt.degree);
-  const std::size_t nn = g.nodes, N = n * nn;
-  double rmax = 0;
-  for (std::size_t i = 0; i < n; ++i) rmax = std::max(rmax, radius[i]);
-  const double spacing = kPi / (opt.degree + 1);
-  const auto pairs = close_pairs(n, center, radius, kNearSpacings * spacing * rmax);
-
-  // each sphere's frame: the pole towards its nearest close neighbour; a sphere with exactly one
-  // close neighbour takes the grid drawn towards it
   std::vector<int> neighbours(n, 0);
   std::vector<double> nearest_gap(n, 1e300);
   std::vector<Sphere> S(n);
@@ -290,19 +281,90 @@ DielectricSphereSolve polarize_dielectric_spheres(Evaluator *ev, std::size_t n, 
       ++neighbours[t];
       if (gap < nearest_gap[t]) {
         nearest_gap[t] = gap;
-        const double q[3] = {(side ? -1 : 1) * p[0] / dist, (side ? -1 : 1) * p[1] / dist, (side ? -1 : 1) * p[2] / dist};
+        const double sg = side ? -1.0 : 1.0, q[3] = {sg * p[0] / dist, sg * p[1] / dist, sg * p[2] / dist};
         frame_with_pole(q, S[t].R);
       }
     }
   }
-  std::map<double, MappedGrid> grids;
   for (std::size_t i = 0; i < n; ++i) {
-    const double sr = neighbours[i] != 1 ? 1.0 : opt.contact_refinement > 0 ? opt.contact_refinement
-                                                                            : automatic_refinement(nearest_gap[i] / radius[i]);
+    const double sr = neighbours[i] != 1 ? 1.0 : refinement > 0 ? refinement : automatic_refinement(nearest_gap[i] / radius[i]);
     auto it = grids.find(sr);
     if (it == grids.end()) it = grids.emplace(sr, mapped_grid(g, sr)).first;
     S[i].grid = &it->second;
   }
+  return S;
+}
+
+// The nodes of close pairs nearer than `reach` radii of the other sphere, with their corrections
+std::vector<NearRow> near_rows(const SphereGrid &g, const std::vector<Sphere> &S,
+                               const std::vector<std::pair<std::size_t, std::size_t>> &pairs,
+                               const std::vector<double> &node_xyz, double reach)
+{
+  const std::size_t nn = g.nodes;
+  std::vector<NearRow> near;
+  for (auto [i, j] : pairs)
+    for (int side = 0; side < 2; ++side) {
+      const std::size_t t = side ? j : i, s = side ? i : j;    // targets on t, the field of s
+      for (std::size_t k = 0; k < nn; ++k) {
+        const double *x = &node_xyz[3 * (t * nn + k)];
+        double d2 = 0;
+        for (int d = 0; d < 3; ++d) d2 += (x[d] - S[s].c[d]) * (x[d] - S[s].c[d]);
+        if (std::sqrt(d2) - S[s].a < reach * S[s].a) near.push_back(NearRow{t * nn + k, s, Matrix()});
+      }
+    }
+#pragma omp parallel for schedule(dynamic)
+  for (std::size_t r = 0; r < near.size(); ++r) near[r].R = near_correction(g, S[near[r].sphere], &node_xyz[3 * near[r].node]);
+  return near;
+}
+
+// Forces, torques and dipoles of the surface charges in the field of E0 and the other spheres
+// (e: the field of all nodes as point charges and the near corrections; q: the nodes' charges;
+// the own sphere's point-charge field taken out directly)
+void sphere_forces(std::size_t n, std::size_t nn, const double *center, const double field[3], const std::vector<double> &e,
+                   const std::vector<double> &q, DielectricSphereSolve &out)
+{
+  out.force.assign(3 * n, 0.0);
+  out.torque.assign(3 * n, 0.0);
+  out.dipole.assign(3 * n, 0.0);
+  std::vector<double> own_grad(3 * nn);
+  for (std::size_t i = 0; i < n; ++i) {
+    direct_sum(KernelSpec{}, nn, &out.node_xyz[3 * i * nn], &q[i * nn], nn, &out.node_xyz[3 * i * nn], nullptr, own_grad.data());
+    for (std::size_t k = 0; k < nn; ++k) {
+      const std::size_t a = i * nn + k;
+      double E[3], r[3];
+      for (int d = 0; d < 3; ++d) {
+        E[d] = field[d] + e[3 * a + d] + own_grad[3 * k + d];
+        r[d] = out.node_xyz[3 * a + d] - center[3 * i + d];
+      }
+      const double qa = out.node_area[a] * out.sigma[a];
+      for (int d = 0; d < 3; ++d) {
+        out.force[3 * i + d] += qa * E[d];
+        out.dipole[3 * i + d] += qa * r[d];
+      }
+      out.torque[3 * i] += qa * (r[1] * E[2] - r[2] * E[1]);
+      out.torque[3 * i + 1] += qa * (r[2] * E[0] - r[0] * E[2]);
+      out.torque[3 * i + 2] += qa * (r[0] * E[1] - r[1] * E[0]);
+    }
+  }
+}
+
+}    // namespace
+
+DielectricSphereSolve polarize_dielectric_spheres(Evaluator *ev, std::size_t n, const double *center,
+                                                  const double *radius, const double *eps,
+                                                  const double field[3], const DielectricSphereOptions &opt)
+{
+  check_input(ev, n, center, radius, eps, field, opt);
+  using clock = std::chrono::steady_clock;
+  const auto t0 = clock::now();
+  const SphereGrid g(opt.degree);
+  const std::size_t nn = g.nodes, N = n * nn;
+  double rmax = 0;
+  for (std::size_t i = 0; i < n; ++i) rmax = std::max(rmax, radius[i]);
+  const double reach = kNearSpacings * kPi / (opt.degree + 1);    // in radii
+  const auto pairs = close_pairs(n, center, radius, reach * rmax);
+  std::map<double, MappedGrid> grids;
+  const std::vector<Sphere> S = place_spheres(g, n, center, radius, pairs, opt.contact_refinement, grids);
 
   DielectricSphereSolve out;
   out.nodes_per_sphere = nn;
@@ -319,31 +381,15 @@ DielectricSphereSolve polarize_dielectric_spheres(Evaluator *ev, std::size_t n, 
       out.node_area[a] = g.weight[k] * l * l * radius[i] * radius[i];
     }
   }
-
-  // nodes near another sphere
-  std::vector<NearRow> near;
-  for (auto [i, j] : pairs)
-    for (int side = 0; side < 2; ++side) {
-      const std::size_t t = side ? j : i, s = side ? i : j;    // targets on t, the field of s
-      for (std::size_t k = 0; k < nn; ++k) {
-        const double *x = &out.node_xyz[3 * (t * nn + k)];
-        double d2 = 0;
-        for (int d = 0; d < 3; ++d) d2 += (x[d] - center[3 * s + d]) * (x[d] - center[3 * s + d]);
-        if (std::sqrt(d2) - radius[s] < kNearSpacings * spacing * radius[s])
-          near.push_back(NearRow{t * nn + k, s, Matrix()});
-      }
-    }
-#pragma omp parallel for schedule(dynamic)
-  for (std::size_t r = 0; r < near.size(); ++r)
-    near[r].R = near_correction(g, S[near[r].sphere], &out.node_xyz[3 * near[r].node]);
+  const std::vector<NearRow> near = near_rows(g, S, pairs, out.node_xyz, reach);
   out.near_rows = near.size();
   const auto t1 = clock::now();
   out.seconds_setup = std::chrono::duration<double>(t1 - t0).count();
 
   // the field of all surface charges at the nodes (each node's own sphere as point charges,
   // which apply() replaces by the exact operator), plus the near corrections: e (3 per node)
-  std::vector<double> q(N), grad(3 * N);
-  auto surface_field = [&](const double *sigma, double *e) {
+  std::vector<double> q(N), grad(3 * N), e(3 * N);
+  auto surface_field = [&](const double *sigma) {
     for (std::size_t k = 0; k < N; ++k) q[k] = out.node_area[k] * sigma[k] / (4.0 * kPi);
     if (ev)
       ev->evaluate(N, out.node_xyz.data(), q.data(), N, out.node_xyz.data(), nullptr, grad.data());
@@ -357,9 +403,8 @@ DielectricSphereSolve polarize_dielectric_spheres(Evaluator *ev, std::size_t n, 
       for (int d = 0; d < 3; ++d) e[3 * r.node + d] += de[d];
     }
   };
-  std::vector<double> e(3 * N);
   auto apply = [&](const double *sigma, double *y) {
-    surface_field(sigma, e.data());
+    surface_field(sigma);
     for (std::size_t i = 0; i < n; ++i) {
       Eigen::Map<const Eigen::VectorXd> si(sigma + i * nn, nn);
       const Eigen::VectorXd own_field = S[i].grid->own * si;
@@ -384,32 +429,8 @@ DielectricSphereSolve polarize_dielectric_spheres(Evaluator *ev, std::size_t n, 
   out.residual = res.residual;
   out.converged = res.converged;
 
-  // forces: the field of E0 and the other spheres at each node (the own sphere's point-charge
-  // field taken out directly)
-  surface_field(out.sigma.data(), e.data());
-  out.force.assign(3 * n, 0.0);
-  out.torque.assign(3 * n, 0.0);
-  out.dipole.assign(3 * n, 0.0);
-  for (std::size_t i = 0; i < n; ++i) {
-    std::vector<double> own_grad(3 * nn);
-    direct_sum(KernelSpec{}, nn, &out.node_xyz[3 * i * nn], &q[i * nn], nn, &out.node_xyz[3 * i * nn], nullptr, own_grad.data());
-    for (std::size_t k = 0; k < nn; ++k) {
-      const std::size_t a = i * nn + k;
-      double E[3], r[3];
-      for (int d = 0; d < 3; ++d) {
-        E[d] = field[d] + e[3 * a + d] + own_grad[3 * k + d];
-        r[d] = out.node_xyz[3 * a + d] - center[3 * i + d];
-      }
-      const double qa = out.node_area[a] * out.sigma[a];
-      for (int d = 0; d < 3; ++d) {
-        out.force[3 * i + d] += qa * E[d];
-        out.dipole[3 * i + d] += qa * r[d];
-      }
-      out.torque[3 * i] += qa * (r[1] * E[2] - r[2] * E[1]);
-      out.torque[3 * i + 1] += qa * (r[2] * E[0] - r[0] * E[2]);
-      out.torque[3 * i + 2] += qa * (r[0] * E[1] - r[1] * E[0]);
-    }
-  }
+  surface_field(out.sigma.data());
+  sphere_forces(n, nn, center, field, e, q, out);
   out.seconds_solve = std::chrono::duration<double>(clock::now() - t1).count();
   return out;
 }

@@ -15,6 +15,9 @@ cases:
   polarize the dipole input with induced dipoles on half of the atoms (fix kifmm/polarize, the
            external field of fix efield): forces, torques and induced dipoles at steps 0, 10,
            20 equal those of --reference (lmp_kifmm) to 1e-10
+  dielectric  8 dielectric spheres, gaps of 0.06-0.34 radii, in a uniform field (fix
+           kifmm/dielectric, fix nve/sphere, 20 steps): forces, torques and induced dipoles at
+           steps 0, 10, 20 equal those of --reference (lmp_kifmm) to 1e-10
   mpi      the same input on 2 ranks (--mpirun) equals 1 rank to 1e-10
   clumps   fix clump/rigid with a molecule template, fix pour (rigid keyword) and the gravity
            keyword, charged pebbles under kspace kifmm: 5 clumps inserted with the union mass,
@@ -109,6 +112,38 @@ POLARIZE_INPUT = (DIPOLE_INPUT
                   .replace("fix nve all nve/sphere update dipole", "fix nve all nve/sphere")
                   .replace("thermo_style custom step pe elong ke", "thermo_style custom step pe elong ke f_pol f_pol[1]")
                   .replace("fx fy fz tqx tqy tqz", "fx fy fz tqx tqy tqz mux muy muz"))
+
+# 8 dielectric spheres of radius 1 at the corners of a cube of edge 2.2, jittered (gaps of
+# 0.06-0.34 radii), heavy enough to move little in 20 steps
+DIELECTRIC_INPUT = """\
+units lj
+atom_style sphere
+atom_modify map array
+boundary f f f
+region box block -3 5 -3 5 -3 5
+create_box 1 box
+create_atoms 1 single -0.06 -0.06 -0.06 units box
+create_atoms 1 single 0.00 0.03 2.17 units box
+create_atoms 1 single 0.06 2.17 0.00 units box
+create_atoms 1 single -0.03 2.26 2.23 units box
+create_atoms 1 single 2.23 0.00 0.06 units box
+create_atoms 1 single 2.14 -0.06 2.14 units box
+create_atoms 1 single 2.20 2.23 -0.03 units box
+create_atoms 1 single 2.26 2.17 2.20 units box
+set group all diameter 2.0
+set group all density 100.0
+pair_style zero 2.5
+pair_coeff * *
+fix d all kifmm/dielectric permittivity 8 field 0.3 -0.2 1.0 degree 8 tol 1e-12
+fix_modify d energy yes
+fix nve all nve/sphere
+timestep 0.01
+thermo_style custom step pe ke f_d f_d[1]
+thermo_modify norm no format float %.15g
+dump d all custom 10 forces.*.dump id x y z fx fy fz tqx tqy tqz f_d[1] f_d[2] f_d[3]
+dump_modify d format float %.17g sort id
+run 20
+"""
 
 CLUMP_INPUT = """\
 units si
@@ -253,10 +288,10 @@ def compare(a, b, tol, what):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("case", choices=["kspace", "dipoles", "polarize", "mpi", "clumps", "restart", "clumps-mpi", "python"])
+    ap.add_argument("case", choices=["kspace", "dipoles", "polarize", "dielectric", "mpi", "clumps", "restart", "clumps-mpi", "python"])
     ap.add_argument("--lmp", required=True)
     ap.add_argument("--plugin", required=True)
-    ap.add_argument("--reference", help="lmp_kifmm (kspace, dipoles, polarize)")
+    ap.add_argument("--reference", help="lmp_kifmm (kspace, dipoles, polarize, dielectric)")
     ap.add_argument("--mpirun", nargs="+", help="mpirun command and its options (mpi)")
     ap.add_argument("--potentials", help="the package's potentials/ (clumps, restart)")
     ap.add_argument("--pythonpath", help="that LAMMPS's python/ directory (python)")
@@ -287,6 +322,13 @@ def main():
             if induced != 170:
                 sys.exit("polarize: the reference has no induced dipoles on the polarizable atoms")
             compare(read_dumps(d1), steps, 1e-10, "polarize: plugin in current LAMMPS vs lmp_kifmm")
+        elif a.case == "dielectric":
+            d1, _ = kspace_dir([a.lmp], plugin, work, "current", DIELECTRIC_INPUT)
+            d2, _ = kspace_dir([a.reference], None, work, "reference", DIELECTRIC_INPUT)
+            steps = read_dumps(d2)
+            if sorted(steps) != [0, 10, 20] or any(len(r) != 12 or len(rows) != 8 for rows in steps.values() for r in rows.values()):
+                sys.exit("dielectric: the reference dumps lack steps, atoms or dipole columns")
+            compare(read_dumps(d1), steps, 1e-10, "dielectric: plugin in current LAMMPS vs lmp_kifmm")
         elif a.case == "mpi":
             d1, _ = kspace_dir([a.lmp], plugin, work, "np1")
             d2, out = kspace_dir(a.mpirun + ["-np", "2", a.lmp], plugin, work, "np2")

@@ -400,7 +400,7 @@ PolarizationSolve solve_induced_dipoles(std::size_t n, const double *alpha, cons
 //                   from its sigma interpolated by its harmonics on a quadrature graded
 //                   towards the node's nearest surface point (precomputed once per solve).
 // Two touching spheres of permittivity ratio 10: force within 0.4 % of the exact value at
-// L = 12, 0.04 % at L = 16 (a gap of 0.05 radii: 1e-4 and 1e-7).
+// L = 12, 0.04 % at L = 16 (a gap of 0.05 radii: 7e-5 and 2e-6; bench/dielectric/results).
 // Solved by GMRES from the isolated spheres' solution 3 (eps - 1) / (eps + 2) E0 . n. Forces,
 // torques and dipoles are those of the surface charges in the field of everything else
 // (E0 and the other spheres): F_i = int_i sigma E dS, in units of eps_out (times eps_0 eps_out

@@ -9,6 +9,7 @@
 #include <Eigen/Dense>
 
 #include <cmath>
+#include <vector>
 
 namespace kifmm_points {
 
@@ -42,6 +43,42 @@ inline double two_sphere_force(double a, double d, double eps, double E0, int de
     F -= m * C * 4 * std::acos(-1.0) * x[m - 2];
   }
   return F;
+}
+
+// The same for k spheres on the z axis (centres z, radii a, permittivity ratios eps), field E0
+// along z: the forces along z (force[i]). The re-expansion about centre i of sphere j's
+// r_j^-(n+1) P_n has the sign (-1)^m when z_i > z_j and (-1)^n when z_i < z_j.
+inline std::vector<double> axial_spheres_forces(const std::vector<double> &z, const std::vector<double> &a,
+                                                const std::vector<double> &eps, double E0, int degrees)
+{
+  const int k = (int) z.size(), N = degrees;
+  Eigen::MatrixXd M = Eigen::MatrixXd::Identity(k * N, k * N);
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(k * N);
+  auto alpha = [&](int i, int m) { return m * (eps[i] - 1) / (m * eps[i] + m + 1) * std::pow(a[i], 2 * m + 1); };
+  // T(i, j, n, m): coefficient of r_i^m P_m about centre i of sphere j's degree-n term
+  auto T = [&](int i, int j, int n, int m) {
+    const double s = z[i] - z[j], d = std::fabs(s);
+    const double c = std::exp(std::lgamma(n + m + 1.0) - std::lgamma(n + 1.0) - std::lgamma(m + 1.0) - (n + m + 1) * std::log(d));
+    return ((s > 0 ? m : n) % 2 ? -1.0 : 1.0) * c;
+  };
+  for (int i = 0; i < k; ++i) {
+    rhs[i * N] = alpha(i, 1) * E0;
+    for (int j = 0; j < k; ++j)
+      if (j != i)
+        for (int m = 1; m <= N; ++m)
+          for (int n = 1; n <= N; ++n) M(i * N + m - 1, j * N + n - 1) += alpha(i, m) * T(i, j, n, m);
+  }
+  const Eigen::VectorXd x = M.partialPivLu().solve(rhs);
+  std::vector<double> force(k, 0.0);
+  for (int i = 0; i < k; ++i)
+    for (int m = 2; m <= N; ++m) {
+      double C = 0;
+      for (int j = 0; j < k; ++j)
+        if (j != i)
+          for (int n = 1; n <= N; ++n) C += x[j * N + n - 1] * T(i, j, n, m);
+      force[i] -= m * C * 4 * std::acos(-1.0) * x[i * N + m - 2];
+    }
+  return force;
 }
 
 }    // namespace kifmm_points

@@ -162,3 +162,22 @@ TEST(DielectricSpheres, BadInputIsAnError)
   opt.degree = 0;
   EXPECT_THROW(kifmm::polarize_dielectric_spheres(nullptr, 2, c2, r, eps, E, opt), std::invalid_argument);
 }
+
+TEST(DielectricSpheres, ChainOfThreeMatchesTheReference)
+{
+  // three spheres in a row along the field, gaps of 0.1 radii: the middle one has two close
+  // neighbours (undrawn grid); the end forces against the axial multipole solution of three
+  // spheres (which reduces to the two-sphere one), the middle force zero by symmetry
+  EXPECT_NEAR(kifmm_points::axial_spheres_forces({1.05, -1.05}, {1, 1}, {10, 10}, 1, 100)[0] /
+                  kifmm_points::two_sphere_force(1, 2.1, 10, 1, 100), 1.0, 1e-12);
+  const double d = 2.1;
+  const auto ref = kifmm_points::axial_spheres_forces({d, 0, -d}, {1, 1, 1}, {10, 10, 10}, 1, 200);
+  const double c[9] = {0, 0, d, 0, 0, 0, 0, 0, -d}, r[3] = {1, 1, 1}, e[3] = {10, 10, 10}, E[3] = {0, 0, 1};
+  kifmm::DielectricSphereOptions o;
+  o.degree = 12;
+  o.tolerance = 1e-11;
+  const auto s = kifmm::polarize_dielectric_spheres(nullptr, 3, c, r, e, E, o);
+  EXPECT_LT(std::fabs(s.force[2] / ref[0] - 1), 1e-2) << s.force[2] << " against " << ref[0];
+  EXPECT_LT(std::fabs(s.force[8] / ref[2] - 1), 1e-2) << s.force[8] << " against " << ref[2];
+  EXPECT_LT(std::fabs(s.force[5]), 1e-8 * std::fabs(ref[0]));
+}

@@ -5,12 +5,15 @@
 //              drawn towards the contact: the relative error of the force against the
 //              converged multipole reference (unittest/common/two_dielectric_spheres.h), and
 //              that of the point-dipole model;
+//   chain    : three spheres in a row along the field (the middle one has two close neighbours
+//              and keeps the undrawn grid), gaps 0.1 .. 0: the relative error of the end
+//              sphere's force against the axial multipole solution of three spheres;
 //   cost     : k^3 spheres on a cubic lattice with gaps of 0.1 radii, field along a diagonal:
 //              one solve with the FMM (order 8) and with the direct sum in the same run (one
 //              thread): the setup (grids, near rows), the solve (GMRES and forces) of each and
 //              their ratio, GMRES steps, nodes with graded quadrature and their memory, and the
 //              largest force difference between the two.
-//   bench_dielectric_spheres [--accuracy] [--cost] [--lattice 2,3] [--degrees 8,12]
+//   bench_dielectric_spheres [--accuracy] [--chain] [--cost] [--lattice 2,3] [--degrees 8,12]
 #include "kifmm.h"
 #include "two_dielectric_spheres.h"
 
@@ -60,6 +63,23 @@ void accuracy()
   }
 }
 
+void chain()
+{
+  std::printf("| gap / a | degree | end force error |\n|---|---|---|\n");
+  for (double gap : {0.1, 0.05, 0.01, 0.0}) {
+    const double d = 2 + gap;
+    const auto ref = kifmm_points::axial_spheres_forces({d, 0, -d}, {1, 1, 1}, {10, 10, 10}, 1, 200);
+    for (int L : {12, 16}) {
+      const double c[9] = {0, 0, d, 0, 0, 0, 0, 0, -d}, r[3] = {1, 1, 1}, e[3] = {10, 10, 10}, E[3] = {0, 0, 1};
+      kifmm::DielectricSphereOptions o;
+      o.degree = L;
+      o.tolerance = 1e-11;
+      const auto s = kifmm::polarize_dielectric_spheres(nullptr, 3, c, r, e, E, o);
+      std::printf("| %g | %d | %+.1e |\n", gap, L, s.force[2] / ref[0] - 1);
+    }
+  }
+}
+
 void cost(const std::vector<int> &lattice, const std::vector<int> &degrees)
 {
   std::printf("| spheres | degree | nodes | GMRES steps | near rows | near memory MB | setup s | solve FMM s | solve direct s | FMM / direct | max force difference / max force |\n");
@@ -97,20 +117,22 @@ void cost(const std::vector<int> &lattice, const std::vector<int> &degrees)
 
 int main(int argc, char **argv)
 {
-  bool acc = false, cst = false;
+  bool acc = false, cst = false, chn = false;
   std::vector<int> lattice{2, 3}, degrees{8, 12};
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--accuracy")) acc = true;
     else if (!std::strcmp(argv[i], "--cost")) cst = true;
+    else if (!std::strcmp(argv[i], "--chain")) chn = true;
     else if (!std::strcmp(argv[i], "--lattice") && i + 1 < argc) lattice = int_list(argv[++i]);
     else if (!std::strcmp(argv[i], "--degrees") && i + 1 < argc) degrees = int_list(argv[++i]);
     else {
-      std::fprintf(stderr, "usage: bench_dielectric_spheres [--accuracy] [--cost] [--lattice 2,3] [--degrees 8,12]\n");
+      std::fprintf(stderr, "usage: bench_dielectric_spheres [--accuracy] [--chain] [--cost] [--lattice 2,3] [--degrees 8,12]\n");
       return 1;
     }
   }
-  if (!acc && !cst) acc = cst = true;
+  if (!acc && !cst && !chn) acc = chn = cst = true;
   if (acc) accuracy();
+  if (chn) chain();
   if (cst) cost(lattice, degrees);
   return 0;
 }

@@ -45,6 +45,10 @@ FixKIFMMDielectric::FixKIFMMDielectric(LAMMPS *lmp, int narg, char **arg) : Fix(
     } else if (key == "order") {
       order = utils::inumeric(FLERR, arg[iarg + 1], false, lmp);
       if (order < 3 || order > 14) error->all(FLERR, "fix kifmm/dielectric: order {} must be in 3 .. 14", order);
+    } else if (key == "overlap") {
+      const std::string v = arg[iarg + 1];
+      if (v != "touch" && v != "error") error->all(FLERR, "fix kifmm/dielectric: overlap must be touch or error, not '{}'", v);
+      touch_overlaps = v == "touch";
     } else if (key == "shrink") {
       shrink = utils::numeric(FLERR, arg[iarg + 1], false, lmp);
       if (!(shrink >= 0 && shrink < 0.5)) error->all(FLERR, "fix kifmm/dielectric: shrink {} must be in [0, 0.5)", arg[iarg + 1]);
@@ -58,8 +62,8 @@ FixKIFMMDielectric::FixKIFMMDielectric(LAMMPS *lmp, int narg, char **arg) : Fix(
   scalar_flag = 1;    // the polarization energy
   extscalar = 1;
   energy_global_flag = 1;
-  vector_flag = 1;    // GMRES steps, residual, nodes with a graded quadrature
-  size_vector = 3;
+  vector_flag = 1;    // GMRES steps, residual, nodes with a graded quadrature, overlapping pairs
+  size_vector = 4;
   extvector = 0;
   global_freq = 1;
   peratom_flag = 1;    // the induced dipoles
@@ -141,6 +145,7 @@ void FixKIFMMDielectric::post_force(int)
   kifmm::DielectricSphereOptions opt;
   opt.degree = degree;
   opt.tolerance = tol;
+  opt.touch_overlaps = touch_overlaps;
   kifmm::DielectricSphereSolve s;
   try {
     s = kifmm::polarize_dielectric_spheres(n > 0 ? evaluator.get() : nullptr, n, center.data(), radius.data(), eps.data(),
@@ -150,13 +155,14 @@ void FixKIFMMDielectric::post_force(int)
     if (std::sscanf(e.what(), "dielectric spheres: spheres %zu and %zu overlap", &a, &b) == 2 && a < n && b < n)
       error->all(FLERR,
                  "fix kifmm/dielectric: the spheres of atoms {} and {} overlap (the surface equation needs "
-                 "separate spheres; granular contacts pressing them together: keyword shrink)",
+                 "separate spheres; keyword overlap touch solves overlapping spheres as touching)",
                  ids[a], ids[b]);
     error->all(FLERR, "fix kifmm/dielectric: {}", e.what());
   }
   iterations = s.iterations;
   residual = s.residual;
   near_rows = (double) s.near_rows;
+  overlapping_pairs = (double) s.overlapping_pairs;
   if (!s.converged && comm->me == 0)
     error->warning(FLERR, "fix kifmm/dielectric: GMRES stopped at relative residual {:.3g} (tol {:.3g}) at step {}",
                    s.residual, tol, update->ntimestep);
@@ -192,7 +198,7 @@ double FixKIFMMDielectric::compute_scalar()
 
 double FixKIFMMDielectric::compute_vector(int k)
 {
-  return k == 0 ? iterations : k == 1 ? residual : near_rows;
+  return k == 0 ? iterations : k == 1 ? residual : k == 2 ? near_rows : overlapping_pairs;
 }
 
 double FixKIFMMDielectric::memory_usage()

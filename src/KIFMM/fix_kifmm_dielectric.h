@@ -1,6 +1,6 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // fix ID group kifmm/dielectric permittivity EPS field Ex Ey Ez [degree L] [tol T] [order P]
-//                               [shrink S]
+//                               [shrink S] [overlap touch|error]
 //
 // Dielectric spheres (the group; atom radii) in a uniform external field, polarized beyond the
 // point-dipole model: the bound surface charge of every sphere from the boundary integral
@@ -40,7 +40,8 @@ class FixKIFMMDielectric : public Fix {
   std::unique_ptr<kifmm::Evaluator> evaluator;
   double energy = 0, residual = 0;
   int iterations = 0, nmax = 0;
-  double near_rows = 0;
+  double near_rows = 0, overlapping_pairs = 0;
+  bool touch_overlaps = true;
   double **dipole = nullptr;    // induced dipole of each local atom (array_atom)
 };
 

@@ -181,3 +181,25 @@ TEST(DielectricSpheres, ChainOfThreeMatchesTheReference)
   EXPECT_LT(std::fabs(s.force[8] / ref[2] - 1), 1e-2) << s.force[8] << " against " << ref[2];
   EXPECT_LT(std::fabs(s.force[5]), 1e-8 * std::fabs(ref[0]));
 }
+
+TEST(DielectricSpheres, OverlapsSolvedAsTouching)
+{
+  // three spheres, two of them overlapping by 0.2 radii, the third clear: touch_overlaps takes
+  // 0.1 off both radii of the pair and solves the touching spheres; the third keeps its radius
+  const double c[9] = {0, 0, 0, 1.8, 0, 0, 0, 3, 0}, r[3] = {1, 1, 1}, eps[3] = {10, 10, 10}, E[3] = {1, 0.5, 0};
+  kifmm::DielectricSphereOptions opt;
+  opt.degree = 8;
+  opt.touch_overlaps = true;
+  const auto s = kifmm::polarize_dielectric_spheres(nullptr, 3, c, r, eps, E, opt);
+  EXPECT_EQ(s.overlapping_pairs, 1u);
+  EXPECT_NEAR(s.radius[0], 0.9, 1e-8);
+  EXPECT_NEAR(s.radius[1], 0.9, 1e-8);
+  EXPECT_EQ(s.radius[2], 1.0);
+  opt.touch_overlaps = false;
+  const auto t = kifmm::polarize_dielectric_spheres(nullptr, 3, c, s.radius.data(), eps, E, opt);
+  for (int k = 0; k < 9; ++k) EXPECT_NEAR(s.force[k], t.force[k], 1e-9);
+  // a sphere (nearly) inside another is an error either way
+  const double c2[6] = {0, 0, 0, 0.05, 0, 0};
+  opt.touch_overlaps = true;
+  EXPECT_THROW(kifmm::polarize_dielectric_spheres(nullptr, 2, c2, r, eps, E, opt), std::invalid_argument);
+}

@@ -105,21 +105,36 @@ TEST_F(DielectricErrors, ClearErrors)
   EXPECT_LAMMPS_ERROR(command("fix e all kifmm/dielectric field 0 0 1"), "the permittivity is missing");
   EXPECT_LAMMPS_ERROR(command("fix e all kifmm/dielectric permittivity -1 field 0 0 1"), "must be positive");
   EXPECT_LAMMPS_ERROR(command("fix e all kifmm/dielectric permittivity 2 field 0 0 1 degree 0"), "degree 0 must be");
+  EXPECT_LAMMPS_ERROR(command("fix e all kifmm/dielectric permittivity 2 field 0 0 1 overlap maybe"), "overlap must be touch or error");
 }
 
 TEST_F(DielectricErrors, OverlapNamesTheAtoms)
 {
   pair(1.9, kU);
-  commands("fix d all kifmm/dielectric permittivity 10 field 0 0 1");
+  commands("fix d all kifmm/dielectric permittivity 10 field 0 0 1 overlap error");
   EXPECT_LAMMPS_ERROR(command("run 0"), "the spheres of atoms 1 and 2 overlap");
 }
 
-TEST_F(Dielectric, ShrinkSeparatesGranularOverlaps)
+TEST_F(Dielectric, OverlapsAreSolvedAsTouching)
 {
-  // an overlap of 0.1 radii, radii shrunk by 5 % in the solve: a gap of 0.0
+  // an overlap of 0.1 radii: solved as two touching spheres of radius 0.95 (overlap touch, the
+  // default), the same forces as spheres of that radius; with shrink 0.05 as well
   pair(1.9, kU);
-  commands("fix d all kifmm/dielectric permittivity 10 field 0 0 1 shrink 0.05\nrun 0");
-  EXPECT_GT(std::fabs(force(1)[2]), 0.0);
+  commands("fix d all kifmm/dielectric permittivity 10 field 0 0 1\nrun 0");
+  const Vec3 f = force(1);
+  EXPECT_EQ(evaluate("f_d[4]"), 1.0);
+  destroy();
+  create();
+  pair(1.9, kU);
+  commands("set group all diameter 1.9\nfix d all kifmm/dielectric permittivity 10 field 0 0 1\nrun 0");
+  const Vec3 g = force(1);
+  EXPECT_EQ(evaluate("f_d[4]"), 0.0);
+  for (int d = 0; d < 3; ++d) EXPECT_NEAR(f[d], g[d], 1e-8 * std::fabs(g[2]));
+  destroy();
+  create();
+  pair(1.9, kU);
+  commands("fix d all kifmm/dielectric permittivity 10 field 0 0 1 shrink 0.05 overlap error\nrun 0");
+  for (int d = 0; d < 3; ++d) EXPECT_NEAR(force(1)[d], g[d], 1e-6 * std::fabs(g[2]));
 }
 
 TEST_F(DielectricErrors, NeedsRadii)

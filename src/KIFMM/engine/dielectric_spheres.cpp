@@ -226,9 +226,11 @@ void check_input(Evaluator *ev, std::size_t n, const double *center, const doubl
   }
 }
 
-// pairs of spheres whose surfaces are closer than `reach` (i < j), by a hash of cells of the
-// largest diameter plus reach; throws for overlapping spheres
-std::vector<std::pair<std::size_t, std::size_t>> close_pairs(std::size_t n, const double *c, const double *r, double reach)
+// pairs of spheres whose surfaces are closer than `reach` (i < j; overlapping ones included), by
+// a hash of cells of the largest diameter plus reach; throws for overlapping spheres unless
+// `overlaps` is set
+std::vector<std::pair<std::size_t, std::size_t>> close_pairs(std::size_t n, const double *c, const double *r, double reach,
+                                                             bool overlaps = false)
 {
   double rmax = 0, lo[3] = {1e300, 1e300, 1e300};
   for (std::size_t i = 0; i < n; ++i) {
@@ -252,7 +254,7 @@ std::vector<std::pair<std::size_t, std::size_t>> close_pairs(std::size_t n, cons
         double d2 = 0;
         for (int d = 0; d < 3; ++d) d2 += (c[3 * i + d] - c[3 * j + d]) * (c[3 * i + d] - c[3 * j + d]);
         const double gap = std::sqrt(d2) - r[i] - r[j];
-        if (gap < -1e-9 * (r[i] + r[j]))
+        if (!overlaps && gap < -1e-9 * (r[i] + r[j]))
           throw std::invalid_argument("dielectric spheres: spheres " + std::to_string(i) + " and " + std::to_string(j) + " overlap");
         if (gap < reach) out.emplace_back(i, j);
       }
@@ -352,6 +354,31 @@ void sphere_forces(std::size_t n, std::size_t nn, const double *center, const do
   }
 }
 
+// Radii with which overlapping spheres touch: each sphere loses half of its largest overlap
+// (then r_i + r_j <= |c_i - c_j| for every pair; spheres that did not overlap still do not).
+// pairs: the number of overlapping pairs.
+std::vector<double> touching_radii(std::size_t n, const double *c, const double *r, std::size_t &pairs)
+{
+  std::vector<double> cut(n, 0.0), out(r, r + n);
+  pairs = 0;
+  for (auto [i, j] : close_pairs(n, c, r, 0.0, true)) {
+    double d2 = 0;
+    for (int d = 0; d < 3; ++d) d2 += (c[3 * i + d] - c[3 * j + d]) * (c[3 * i + d] - c[3 * j + d]);
+    const double overlap = r[i] + r[j] - std::sqrt(d2);
+    if (!(overlap > 0)) continue;
+    ++pairs;
+    const double half = 0.5 * overlap * (1 + 1e-9);
+    cut[i] = std::max(cut[i], half);
+    cut[j] = std::max(cut[j], half);
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    out[i] -= cut[i];
+    if (!(out[i] > 0.05 * r[i]))
+      throw std::invalid_argument("dielectric spheres: sphere " + std::to_string(i) + " lies (nearly) inside another");
+  }
+  return out;
+}
+
 }    // namespace
 
 DielectricSphereSolve polarize_dielectric_spheres(Evaluator *ev, std::size_t n, const double *center,
@@ -361,6 +388,12 @@ DielectricSphereSolve polarize_dielectric_spheres(Evaluator *ev, std::size_t n, 
   check_input(ev, n, center, radius, eps, field, opt);
   using clock = std::chrono::steady_clock;
   const auto t0 = clock::now();
+  DielectricSphereSolve out;
+  out.radius.assign(radius, radius + n);
+  if (opt.touch_overlaps) {
+    out.radius = touching_radii(n, center, radius, out.overlapping_pairs);
+    radius = out.radius.data();
+  }
   const SphereGrid g(opt.degree);
   const std::size_t nn = g.nodes, N = n * nn;
   double rmax = 0;
@@ -370,7 +403,6 @@ DielectricSphereSolve polarize_dielectric_spheres(Evaluator *ev, std::size_t n, 
   std::map<double, MappedGrid> grids;
   const std::vector<Sphere> S = place_spheres(g, n, center, radius, pairs, opt.contact_refinement, grids);
 
-  DielectricSphereSolve out;
   out.nodes_per_sphere = nn;
   out.node_xyz.resize(3 * N);
   out.node_area.resize(N);

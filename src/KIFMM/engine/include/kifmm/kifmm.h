@@ -414,6 +414,9 @@ struct DielectricSphereOptions {
   // the factor s (nodes s times denser there, s times sparser on the far side); 0: chosen from
   // the gap (2 to 4); 1: none
   double contact_refinement = 0.0;
+  // overlapping spheres (granular contacts): solved as touching, each sphere's radius reduced by
+  // half of its largest overlap (DielectricSphereSolve::radius); false: an overlap is an error
+  bool touch_overlaps = false;
 };
 struct DielectricSphereSolve {
   int iterations = 0, evaluations = 0;    // GMRES steps; field evaluations (FMM or direct)
@@ -425,10 +428,12 @@ struct DielectricSphereSolve {
   std::vector<double> node_area;   // surface element of each node (sum: 4 pi a^2 per sphere)
   std::vector<double> sigma;       // surface charge density at the nodes (units of eps_out)
   std::vector<double> force, torque, dipole;    // 3 per sphere (torque and dipole about the centre)
+  std::vector<double> radius;                   // the radii solved with (touch_overlaps)
+  std::size_t overlapping_pairs = 0;            // pairs solved as touching (touch_overlaps)
 };
 // ev: a Laplace evaluator (its order sets the accuracy of the far field), or null for the
-// direct sum. Throws std::invalid_argument on bad input (overlapping spheres, radius or
-// eps_ratio not positive, degree < 1, an evaluator of another kernel).
+// direct sum. Throws std::invalid_argument on bad input (overlapping spheres without
+// touch_overlaps, radius or eps_ratio not positive, degree < 1, an evaluator of another kernel).
 DielectricSphereSolve polarize_dielectric_spheres(Evaluator *ev, std::size_t n, const double *center,
                                                   const double *radius, const double *eps_ratio,
                                                   const double field[3], const DielectricSphereOptions &options);

@@ -45,6 +45,9 @@ FixKIFMMDielectric::FixKIFMMDielectric(LAMMPS *lmp, int narg, char **arg) : Fix(
     } else if (key == "order") {
       order = utils::inumeric(FLERR, arg[iarg + 1], false, lmp);
       if (order < 3 || order > 14) error->all(FLERR, "fix kifmm/dielectric: order {} must be in 3 .. 14", order);
+    } else if (key == "every") {
+      every = utils::inumeric(FLERR, arg[iarg + 1], false, lmp);
+      if (every < 1) error->all(FLERR, "fix kifmm/dielectric: every {} must be positive", every);
     } else if (key == "overlap") {
       const std::string v = arg[iarg + 1];
       if (v != "touch" && v != "error") error->all(FLERR, "fix kifmm/dielectric: overlap must be touch or error, not '{}'", v);
@@ -94,24 +97,33 @@ void FixKIFMMDielectric::init()
     error->all(FLERR, "fix kifmm/dielectric cannot be used with run_style respa");
 }
 
-void FixKIFMMDielectric::setup(int vflag)
+void FixKIFMMDielectric::setup(int)
 {
-  post_force(vflag);
+  solve();
+  apply();
 }
 
 void FixKIFMMDielectric::min_setup(int vflag)
 {
-  post_force(vflag);
+  setup(vflag);
 }
 
-void FixKIFMMDielectric::min_post_force(int vflag)
+void FixKIFMMDielectric::min_post_force(int)
 {
-  post_force(vflag);
+  solve();
+  apply();
 }
 
 void FixKIFMMDielectric::post_force(int)
 {
-  // every rank: all spheres of the group in the order of their atom IDs
+  if (update->ntimestep - last_solve >= every) solve();
+  apply();
+}
+
+// every rank: all spheres of the group in the order of their atom IDs, solved; their forces,
+// torques and dipoles in LAMMPS units kept by atom ID
+void FixKIFMMDielectric::solve()
+{
   const int nlocal = atom->nlocal;
   std::vector<double> mine;    // id, x, y, z, radius
   for (int i = 0; i < nlocal; ++i)
@@ -130,7 +142,7 @@ void FixKIFMMDielectric::post_force(int)
   std::iota(order_by_id.begin(), order_by_id.end(), 0);
   std::sort(order_by_id.begin(), order_by_id.end(), [&](std::size_t a, std::size_t b) { return all[5 * a] < all[5 * b]; });
   std::vector<double> center(3 * n), radius(n), eps(n, permittivity / force->dielectric);
-  std::vector<tagint> ids(n);
+  ids.assign(n, 0);
   for (std::size_t k = 0; k < n; ++k) {
     const double *r = &all[5 * order_by_id[k]];
     ids[k] = (tagint) r[0];
@@ -159,6 +171,7 @@ void FixKIFMMDielectric::post_force(int)
                  ids[a], ids[b]);
     error->all(FLERR, "fix kifmm/dielectric: {}", e.what());
   }
+  last_solve = update->ntimestep;
   iterations = s.iterations;
   residual = s.residual;
   near_rows = (double) s.near_rows;
@@ -169,24 +182,39 @@ void FixKIFMMDielectric::post_force(int)
 
   // forces, torques and dipoles in LAMMPS units: the surface charge sigma / (4 pi C)
   const double scale = 1.0 / (4.0 * M_PI * C);
+  sphere_force.resize(3 * n);
+  sphere_torque.resize(3 * n);
+  sphere_dipole.resize(3 * n);
+  energy = 0;
+  for (std::size_t k = 0; k < 3 * n; ++k) {
+    sphere_force[k] = scale * s.force[k];
+    sphere_torque[k] = scale * s.torque[k];
+    sphere_dipole[k] = scale * s.dipole[k];
+    energy -= 0.5 * sphere_dipole[k] * E0[k % 3];
+  }
+}
+
+// the kept forces and torques on the local atoms of the group (by atom ID), their dipoles in
+// the per-atom array
+void FixKIFMMDielectric::apply()
+{
+  const int nlocal = atom->nlocal;
   if (atom->nmax > nmax) {
     nmax = atom->nmax;
     memory->destroy(dipole);
     memory->create(dipole, nmax, 3, "kifmm/dielectric:dipole");
     array_atom = dipole;
   }
-  energy = 0;
-  for (std::size_t k = 0; k < n; ++k)
-    for (int d = 0; d < 3; ++d) energy -= 0.5 * scale * s.dipole[3 * k + d] * E0[d];
   for (int i = 0; i < nlocal; ++i) {
     for (int d = 0; d < 3; ++d) dipole[i][d] = 0.0;
     if (!(atom->mask[i] & groupbit)) continue;
     const auto it = std::lower_bound(ids.begin(), ids.end(), atom->tag[i]);
+    if (it == ids.end() || *it != atom->tag[i]) continue;    // joined the group after the last solve
     const std::size_t k = it - ids.begin();
     for (int d = 0; d < 3; ++d) {
-      atom->f[i][d] += scale * s.force[3 * k + d];
-      if (atom->torque_flag) atom->torque[i][d] += scale * s.torque[3 * k + d];
-      dipole[i][d] = scale * s.dipole[3 * k + d];
+      atom->f[i][d] += sphere_force[3 * k + d];
+      if (atom->torque_flag) atom->torque[i][d] += sphere_torque[3 * k + d];
+      dipole[i][d] = sphere_dipole[3 * k + d];
     }
   }
 }
@@ -203,5 +231,5 @@ double FixKIFMMDielectric::compute_vector(int k)
 
 double FixKIFMMDielectric::memory_usage()
 {
-  return 3.0 * nmax * sizeof(double);
+  return (3.0 * nmax + 9.0 * ids.size()) * sizeof(double) + ids.size() * sizeof(tagint);
 }

@@ -94,6 +94,32 @@ TEST_F(Dielectric, MediumPermittivityScalesTheForce)
   for (int d = 0; d < 3; ++d) EXPECT_NEAR(f2[d], 2 * f1[d], 1e-10 * std::fabs(f1[2]));
 }
 
+TEST_F(Dielectric, EveryHoldsTheForcesBetweenSolves)
+{
+  // every 3: the forces of step 0 held at steps 1 and 2 while the spheres move; solved again at
+  // step 3 (equal to a solve at those positions)
+  auto start = [&]() {
+    pair(2.3, kU);
+    commands("group one id 1\nvelocity one set 0.3 -0.2 0.5 units box\nfix nve all nve/sphere\ntimestep 0.05\n"
+             "fix d all kifmm/dielectric permittivity 10 field 0 0 1 degree 8 every 3");
+  };
+  start();
+  command("run 0");
+  const Vec3 f0 = force(1);
+  command("run 2");
+  const Vec3 f2 = force(1);
+  for (int d = 0; d < 3; ++d) EXPECT_EQ(f2[d], f0[d]);
+  destroy();
+  create();
+  start();
+  command("run 3");
+  const Vec3 f3 = force(1);
+  command("run 0");
+  const Vec3 ref = force(1);
+  for (int d = 0; d < 3; ++d) EXPECT_NEAR(f3[d], ref[d], 1e-12 * std::fabs(ref[2]));
+  EXPECT_GT(std::fabs(f3[2] - f0[2]), 1e-6 * std::fabs(f0[2]));
+}
+
 using DielectricErrors = Dielectric;
 
 TEST_F(DielectricErrors, ClearErrors)
@@ -106,6 +132,7 @@ TEST_F(DielectricErrors, ClearErrors)
   EXPECT_LAMMPS_ERROR(command("fix e all kifmm/dielectric permittivity -1 field 0 0 1"), "must be positive");
   EXPECT_LAMMPS_ERROR(command("fix e all kifmm/dielectric permittivity 2 field 0 0 1 degree 0"), "degree 0 must be");
   EXPECT_LAMMPS_ERROR(command("fix e all kifmm/dielectric permittivity 2 field 0 0 1 overlap maybe"), "overlap must be touch or error");
+  EXPECT_LAMMPS_ERROR(command("fix e all kifmm/dielectric permittivity 2 field 0 0 1 every 0"), "every 0 must be positive");
 }
 
 TEST_F(DielectricErrors, OverlapNamesTheAtoms)

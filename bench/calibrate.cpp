@@ -25,6 +25,14 @@
 // `calibrate --grid-cost [--orders 3-10] [--reps 3]` regenerates kGridCost (calibration.cpp): the
 // per-cell constant of the periodic single-level grid (grid_cost_fit below).
 //
+// `calibrate --grid-occupancy [--orders 9-13] [--reps 2]` measures what the grid's one per-cell
+// constant leaves out (not used by the engine yet): single-level grids k = 3 .. 7 over uniform,
+// Plummer and two-cluster points (N = 1e3, 3e3, 1e4, scaled into the cell [-1,1]^3, neutral),
+// and per order the non-negative least-squares fits (relative residuals) of cpu - (the point,
+// pair and entry terms) to a * k^3 (every cell: its share of the convolution), to a * k^3 + b *
+// occupied cells (P2M, surface FFTs and L2P are skipped for empty cells), and to that + c * N,
+// with the RMS residual of each fit per point set.
+//
 // `calibrate --periodic-errors [--orders 3-13]` measures the periodic column of the choose_order
 // table: relative RMS force error over all points of periodic evaluations (tree of
 // choose_tree) of uniform points in the cell [-1,1]^3 (bench::uniform(n, seed), charges made
@@ -36,6 +44,7 @@
 #include "fmm_core.h"
 #include "kernels.h"
 #include "periodic.h"
+#include "periodic_grid.h"
 
 #include "bench_points.h"
 
@@ -407,10 +416,137 @@ int grid_cost_fit(int order_lo, int order_hi, int reps)
   return 0;
 }
 
+// Non-negative least squares min sum_r ((sum_j x_j A[r][j] - y_r) / w_r)^2 by enumerating the
+// active sets (few unknowns); returns x and the RMS relative residual
+std::pair<std::vector<double>, double> nnls_small(const std::vector<std::vector<double>> &A, const std::vector<double> &y,
+                                                  const std::vector<double> &w)
+{
+  const std::size_t m = A.empty() ? 0 : A[0].size();
+  std::vector<double> best_x(m, 0.0);
+  double best = 1e300;
+  for (unsigned mask = 1; mask < (1u << m); ++mask) {
+    std::vector<std::size_t> idx;
+    for (std::size_t j = 0; j < m; ++j)
+      if (mask & (1u << j)) idx.push_back(j);
+    const std::size_t k = idx.size();
+    Eigen::MatrixXd N = Eigen::MatrixXd::Zero(k, k);
+    Eigen::VectorXd b = Eigen::VectorXd::Zero(k);
+    for (std::size_t r = 0; r < A.size(); ++r)
+      for (std::size_t a = 0; a < k; ++a) {
+        b[a] += A[r][idx[a]] * y[r] / (w[r] * w[r]);
+        for (std::size_t c = 0; c < k; ++c) N(a, c) += A[r][idx[a]] * A[r][idx[c]] / (w[r] * w[r]);
+      }
+    const Eigen::VectorXd x = N.ldlt().solve(b);
+    if (x.minCoeff() < 0 || !x.allFinite()) continue;
+    std::vector<double> full(m, 0.0);
+    for (std::size_t a = 0; a < k; ++a) full[idx[a]] = x[a];
+    double rr = 0;
+    for (std::size_t r = 0; r < A.size(); ++r) {
+      double f = 0;
+      for (std::size_t j = 0; j < m; ++j) f += full[j] * A[r][j];
+      rr += std::pow((f - y[r]) / w[r], 2);
+    }
+    if (rr < best) best = rr, best_x = full;
+  }
+  return {best_x, std::sqrt(best / std::max<std::size_t>(1, A.size()))};
+}
+
+int grid_occupancy_fit(int order_lo, int order_hi, int reps)
+{
+  const char *sets[3] = {"uniform", "plummer", "clusters"};
+  for (int order = order_lo; order <= order_hi; ++order) {
+    struct Run {
+      int set;
+      double n, cells, occupied, cpu, rest;
+    };
+    std::vector<Run> runs;
+    for (int set = 0; set < 3; ++set)
+      for (double nd : {1e3, 3e3, 1e4}) {
+        const std::size_t n = (std::size_t) nd;
+        const bench::Points p = bench::into_periodic_cell(set == 0   ? bench::uniform(n, 7)
+                                                              : set == 1 ? kifmm_points::plummer(n, 7)
+                                                                         : kifmm_points::two_clusters(n, 7));
+        for (int k = 3; k <= std::min(7, max_grid_cells_long(order, nullptr)); ++k) {
+          if (nd / (k * k * k) < 4) continue;
+          Options o;
+          o.order = order;
+          o.fixed_root = true;
+          o.periodic = true;
+          o.periodic_grid = k;
+          auto ev = make_evaluator(KernelSpec{}, o);
+          std::vector<double> pot(n), g(3 * n);
+          ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());    // kernels
+          double best = 1e30;
+          for (int r = 0; r < reps; ++r) {
+            const double c0 = cpu_now();
+            int m = 0;
+            do {
+              ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());
+              ++m;
+            } while (cpu_now() - c0 < 0.05);
+            best = std::min(best, (cpu_now() - c0) / m);
+          }
+          const TreeCounts t = grid_counts(n, p.xyz.data(), o.root_center, 1.0, k);
+          std::vector<int> occ(k * k * k, 0);
+          for (std::size_t i = 0; i < n; ++i) occ[grid_cell_index(&p.xyz[3 * i], o.root_center, 1.0, k)] = 1;
+          double occupied = 0;
+          for (int v : occ) occupied += v;
+          const CostConstants c = cost_constants(order);
+          const double rest = c.point * nd + c.pair * (t.near_pairs + self_pair_extra() * t.self_pairs) + c.entry * t.entries;
+          runs.push_back({set, nd, t.cells, occupied, best, rest});
+          std::fprintf(stderr, "order %d %s N %zu k %d: occupied %g of %g cells, cpu %.5f s, point/pair/entry terms %.5f s\n",
+                       order, sets[set], n, k, occupied, t.cells, best, rest);
+        }
+      }
+    std::printf("order %d:", order);
+    for (int terms = 1; terms <= 3; ++terms) {
+      std::vector<std::vector<double>> A;
+      std::vector<double> y, w;
+      for (const Run &r : runs) {
+        std::vector<double> row{r.cells};
+        if (terms >= 2) row.push_back(r.occupied);
+        if (terms >= 3) row.push_back(r.n);
+        A.push_back(row);
+        y.push_back(r.cpu - r.rest);
+        w.push_back(r.cpu);
+      }
+      const auto [x, rms] = nnls_small(A, y, w);
+      std::printf("  | %s: a %.4g ns", terms == 1 ? "cells" : terms == 2 ? "cells + occupied" : "cells + occupied + N", 1e9 * x[0]);
+      if (terms >= 2) std::printf(", b %.4g ns", 1e9 * x[1]);
+      if (terms >= 3) std::printf(", c %.4g ns", 1e9 * x[2]);
+      std::printf(" [rms %.3f;", rms);
+      for (int set = 0; set < 3; ++set) {
+        double rr = 0;
+        int cnt = 0;
+        for (std::size_t r = 0; r < runs.size(); ++r) {
+          if (runs[r].set != set) continue;
+          double f = runs[r].rest;
+          for (std::size_t j = 0; j < x.size(); ++j) f += x[j] * A[r][j];
+          rr += std::pow((f - runs[r].cpu) / runs[r].cpu, 2);
+          ++cnt;
+        }
+        std::printf(" %s %.3f", sets[set], cnt ? std::sqrt(rr / cnt) : 0.0);
+      }
+      std::printf("]");
+    }
+    std::printf("\n");
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
 }    // namespace
 
 int main(int argc, char **argv)
 {
+  if (argc > 1 && !std::strcmp(argv[1], "--grid-occupancy")) {
+    int lo = 9, hi = 13, reps = 2;
+    for (int i = 2; i + 1 < argc; i += 2) {
+      if (!std::strcmp(argv[i], "--orders")) std::sscanf(argv[i + 1], "%d-%d", &lo, &hi);
+      else if (!std::strcmp(argv[i], "--reps")) reps = std::atoi(argv[i + 1]);
+    }
+    return grid_occupancy_fit(lo, hi, reps);
+  }
   if (argc > 1 && !std::strcmp(argv[1], "--grid-cost")) {
     int lo = 3, hi = 10, reps = 3;
     for (int i = 2; i + 1 < argc; i += 2) {

@@ -422,8 +422,9 @@ std::pair<std::vector<double>, double> nnls_small(const std::vector<std::vector<
                                                   const std::vector<double> &w)
 {
   const std::size_t m = A.empty() ? 0 : A[0].size();
-  std::vector<double> best_x(m, 0.0);
-  double best = 1e300;
+  std::vector<double> best_x(m, 0.0);    // all zero: the fit when no term helps
+  double best = 0;
+  for (std::size_t r = 0; r < A.size(); ++r) best += std::pow(y[r] / w[r], 2);
   for (unsigned mask = 1; mask < (1u << m); ++mask) {
     std::vector<std::size_t> idx;
     for (std::size_t j = 0; j < m; ++j)

@@ -55,7 +55,7 @@ void accuracy()
         o.contact_refinement = k == 0 ? 1.0 : 0.0;
         const auto sol = kifmm::polarize_dielectric_spheres(nullptr, 2, c, r, e, E, o);
         err[k] = sol.force[2] / ref - 1;
-        if (k == 1) s = gap >= 0.04 ? 2 : gap >= 0.008 ? 3 : 4;
+        if (k == 1) s = sol.refinement[0];
       }
       std::printf("| %g | %d | %d | %+.1e | (%g) %+.1e | %+.2f |\n", gap, L, 2 * (L + 1) * (L + 1), err[0], s, err[1],
                   dipole / ref - 1);

@@ -366,6 +366,33 @@ int periodic_errors(int order_lo, int order_hi)
 // in the cell [-1,1]^3 at N = 3e3, 1e4, 3e4 and every grid with 8 to 1000 points per cell (up
 // to max_grid_cells), minus the octree-fitted point, pair and entry terms of their actual
 // counts (grid_counts), fitted as cell * k^3 (least squares of the relative residuals).
+// Single-thread CPU seconds of one periodic evaluation of p on the grid of k^3 cells in the
+// cell [-1,1]^3 (the kernels made first): the minimum over reps rounds, each the mean over
+// evaluations repeated for at least min_time seconds (0: one evaluation)
+double grid_evaluation_seconds(int order, int k, const bench::Points &p, int reps, double min_time)
+{
+  Options o;
+  o.order = order;
+  o.fixed_root = true;
+  o.periodic = true;
+  o.periodic_grid = k;
+  auto ev = make_evaluator(KernelSpec{}, o);
+  const std::size_t n = p.size();
+  std::vector<double> pot(n), g(3 * n);
+  ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());    // kernels
+  double best = 1e30;
+  for (int r = 0; r < reps; ++r) {
+    const double c0 = cpu_now();
+    int m = 0;
+    do {
+      ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());
+      ++m;
+    } while (cpu_now() - c0 < min_time);
+    best = std::min(best, (cpu_now() - c0) / m);
+  }
+  return best;
+}
+
 int grid_cost_fit(int order_lo, int order_hi, int reps)
 {
   std::printf("    // order, cell (ns)   [rms relative residual of the fit]\n");
@@ -384,21 +411,9 @@ int grid_cost_fit(int order_lo, int order_hi, int reps)
       for (int k = 3; k <= max_grid_cells_long(order, nullptr); ++k) {    // the memory bound
         const double m = nd / (k * k * k);
         if (m < 8 || m > 1000) continue;
-        Options o;
-        o.order = order;
-        o.fixed_root = true;
-        o.periodic = true;
-        o.periodic_grid = k;
-        auto ev = make_evaluator(KernelSpec{}, o);
-        std::vector<double> pot(n), g(3 * n);
-        ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());    // kernels
-        double best = 1e30;
-        for (int r = 0; r < reps; ++r) {
-          const double c0 = cpu_now();
-          ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());
-          best = std::min(best, cpu_now() - c0);
-        }
-        const TreeCounts t = grid_counts(n, p.xyz.data(), o.root_center, 1.0, k);
+        const double best = grid_evaluation_seconds(order, k, p, reps, 0.0);
+        const double center[3] = {0, 0, 0};
+        const TreeCounts t = grid_counts(n, p.xyz.data(), center, 1.0, k);
         const CostConstants c = cost_constants(order);
         const double rest = c.point * nd + c.pair * (t.near_pairs + self_pair_extra() * t.self_pairs) + c.entry * t.entries;
         runs.push_back({best, rest, t.cells});
@@ -469,27 +484,11 @@ int grid_occupancy_fit(int order_lo, int order_hi, int reps)
                                                                          : kifmm_points::two_clusters(n, 7));
         for (int k = 3; k <= std::min(7, max_grid_cells_long(order, nullptr)); ++k) {
           if (nd / (k * k * k) < 4) continue;
-          Options o;
-          o.order = order;
-          o.fixed_root = true;
-          o.periodic = true;
-          o.periodic_grid = k;
-          auto ev = make_evaluator(KernelSpec{}, o);
-          std::vector<double> pot(n), g(3 * n);
-          ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());    // kernels
-          double best = 1e30;
-          for (int r = 0; r < reps; ++r) {
-            const double c0 = cpu_now();
-            int m = 0;
-            do {
-              ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());
-              ++m;
-            } while (cpu_now() - c0 < 0.05);
-            best = std::min(best, (cpu_now() - c0) / m);
-          }
-          const TreeCounts t = grid_counts(n, p.xyz.data(), o.root_center, 1.0, k);
+          const double best = grid_evaluation_seconds(order, k, p, reps, 0.05);
+          const double center[3] = {0, 0, 0};
+          const TreeCounts t = grid_counts(n, p.xyz.data(), center, 1.0, k);
           std::vector<int> occ(k * k * k, 0);
-          for (std::size_t i = 0; i < n; ++i) occ[grid_cell_index(&p.xyz[3 * i], o.root_center, 1.0, k)] = 1;
+          for (std::size_t i = 0; i < n; ++i) occ[grid_cell_index(&p.xyz[3 * i], center, 1.0, k)] = 1;
           double occupied = 0;
           for (int v : occ) occupied += v;
           const CostConstants c = cost_constants(order);

@@ -42,6 +42,10 @@ using Matrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowM
 // |Phi(u) - Phi(v)|^2 = lambda(u) lambda(v) |u - v|^2 (Moebius maps are conformal), so the
 // own sphere's single-layer kernel stays diagonal in the harmonics of g = sigma lambda^(3/2):
 //   int sigma(y) / (8 pi a |x - y|) dS_y = lambda(u)^(-1/2) sum_lm g_lm Y_lm(u) / (2 (2l + 1)).
+double conformal_scale(double s, const double u[3])
+{
+  return 2.0 * s / (s * s * (1.0 + u[2]) + (1.0 - u[2]));
+}
 double conformal_map(double s, const double u[3], double out[3])
 {
   const double D = s * s * (1.0 + u[2]) + (1.0 - u[2]);
@@ -175,14 +179,8 @@ Matrix near_correction(const SphereGrid &g, const Sphere &S, const double x[3])
         const double r2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
         S.to_own(dir, own);
         // sigma(y) = g(v) lambda(v)^(-3/2), v = Phi_s^-1(own)
-        double lv = 1.0;
-        if (s != 1.0) {
-          conformal_map(1.0 / s, own, v);
-          const double D = s * s * (1.0 + v[2]) + (1.0 - v[2]);
-          lv = 2.0 * s / D;
-        } else {
-          v[0] = own[0], v[1] = own[1], v[2] = own[2];
-        }
+        conformal_map(1.0 / s, own, v);
+        const double lv = conformal_scale(s, v);
         const double k = wpsi / (r2 * std::sqrt(r2) * lv * std::sqrt(lv));
         real_harmonics(g.table, v, y.data());
         for (int d = 0; d < 3; ++d)
@@ -404,6 +402,8 @@ DielectricSphereSolve polarize_dielectric_spheres(Evaluator *ev, std::size_t n, 
   const std::vector<Sphere> S = place_spheres(g, n, center, radius, pairs, opt.contact_refinement, grids);
 
   out.nodes_per_sphere = nn;
+  out.refinement.resize(n);
+  for (std::size_t i = 0; i < n; ++i) out.refinement[i] = S[i].grid->s;
   out.node_xyz.resize(3 * N);
   out.node_area.resize(N);
   std::vector<double> normal(3 * N), lambda(n);

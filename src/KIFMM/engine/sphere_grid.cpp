@@ -54,11 +54,6 @@ void real_harmonics(const HarmonicsTable &t, const double u[3], double *y)
   }
 }
 
-void real_harmonics(int degree, const double u[3], double *y)
-{
-  real_harmonics(HarmonicsTable(degree), u, y);
-}
-
 void gauss_legendre(int n, std::vector<double> &x, std::vector<double> &w)
 {
   x.assign(n, 0.0);

@@ -26,7 +26,6 @@ struct HarmonicsTable {
 };
 // y[harmonic_index(l, m)] = Y_lm(u) for l <= degree; u a unit vector.
 void real_harmonics(const HarmonicsTable &t, const double u[3], double *y);
-void real_harmonics(int degree, const double u[3], double *y);
 
 // Gauss-Legendre nodes and weights on [-1, 1] (n >= 1).
 void gauss_legendre(int n, std::vector<double> &x, std::vector<double> &w);

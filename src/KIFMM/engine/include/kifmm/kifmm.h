@@ -429,6 +429,7 @@ struct DielectricSphereSolve {
   std::vector<double> sigma;       // surface charge density at the nodes (units of eps_out)
   std::vector<double> force, torque, dipole;    // 3 per sphere (torque and dipole about the centre)
   std::vector<double> radius;                   // the radii solved with (touch_overlaps)
+  std::vector<double> refinement;               // each sphere's factor s (1: its grid is not drawn)
   std::size_t overlapping_pairs = 0;            // pairs solved as touching (touch_overlaps)
 };
 // ev: a Laplace evaluator (its order sets the accuracy of the far field), or null for the

@@ -22,16 +22,10 @@
 // --cost; --shared-entry: one entry constant for all orders, the per-pair task overhead), with
 // the counts of the trees computed anew (a changed model, no new measurements).
 //
-// `calibrate --grid-cost [--orders 3-10] [--reps 3]` regenerates kGridCost (calibration.cpp): the
-// per-cell constant of the periodic single-level grid (grid_cost_fit below).
-//
-// `calibrate --grid-occupancy [--orders 9-13] [--reps 2]` measures what the grid's one per-cell
-// constant leaves out (not used by the engine yet): single-level grids k = 3 .. 7 over uniform,
-// Plummer and two-cluster points (N = 1e3, 3e3, 1e4, scaled into the cell [-1,1]^3, neutral),
-// and per order the non-negative least-squares fits (relative residuals) of cpu - (the point,
-// pair and entry terms) to a * k^3 (every cell: its share of the convolution), to a * k^3 + b *
-// occupied cells (P2M, surface FFTs and L2P are skipped for empty cells), and to that + c * N,
-// with the RMS residual of each fit per point set.
+// `calibrate --grid-cost [--orders 3-14] [--reps 3]` regenerates kGridCost (calibration.cpp): the
+// per-cell, per-occupied-cell and per-point constants of the periodic single-level grid
+// (grid_cost_fit below). `calibrate --grid-refit GRID.err` fits them again from the stderr of
+// such a run (no new measurements).
 //
 // `calibrate --periodic-errors [--orders 3-13]` measures the periodic column of the choose_order
 // table: relative RMS force error over all points of periodic evaluations (tree of
@@ -361,11 +355,6 @@ int periodic_errors(int order_lo, int order_hi)
   return 0;
 }
 
-// Per-cell constant of the periodic single-level grid (kGridCost in calibration.cpp): for each
-// order, single-thread CPU times (minimum of reps) of grid evaluations of uniform neutral points
-// in the cell [-1,1]^3 at N = 3e3, 1e4, 3e4 and every grid with 8 to 1000 points per cell (up
-// to max_grid_cells), minus the octree-fitted point, pair and entry terms of their actual
-// counts (grid_counts), fitted as cell * k^3 (least squares of the relative residuals).
 // Single-thread CPU seconds of one periodic evaluation of p on the grid of k^3 cells in the
 // cell [-1,1]^3 (the kernels made first): the minimum over reps rounds, each the mean over
 // evaluations repeated for at least min_time seconds (0: one evaluation)
@@ -391,44 +380,6 @@ double grid_evaluation_seconds(int order, int k, const bench::Points &p, int rep
     best = std::min(best, (cpu_now() - c0) / m);
   }
   return best;
-}
-
-int grid_cost_fit(int order_lo, int order_hi, int reps)
-{
-  std::printf("    // order, cell (ns)   [rms relative residual of the fit]\n");
-  for (int order = order_lo; order <= order_hi; ++order) {
-    double sxy = 0, sxx = 0;
-    struct Run {
-      double cpu, rest, cells;
-    };
-    std::vector<Run> runs;
-    for (double nd : {3e3, 1e4, 3e4}) {
-      const std::size_t n = (std::size_t) nd;
-      bench::Points p = bench::uniform(n, 7);
-      double qs = 0;
-      for (double q : p.q) qs += q;
-      for (double &q : p.q) q -= qs / n;
-      for (int k = 3; k <= max_grid_cells_long(order, nullptr); ++k) {    // the memory bound
-        const double m = nd / (k * k * k);
-        if (m < 8 || m > 1000) continue;
-        const double best = grid_evaluation_seconds(order, k, p, reps, 0.0);
-        const double center[3] = {0, 0, 0};
-        const TreeCounts t = grid_counts(n, p.xyz.data(), center, 1.0, k);
-        const CostConstants c = cost_constants(order);
-        const double rest = c.point * nd + c.pair * (t.near_pairs + self_pair_extra() * t.self_pairs) + c.entry * t.entries;
-        runs.push_back({best, rest, t.cells});
-        sxy += (best - rest) * t.cells / (best * best);
-        sxx += t.cells * t.cells / (best * best);
-        std::fprintf(stderr, "order %d N %zu k %d: cpu %.4f s, pair/point/entry terms %.4f s\n", order, n, k, best, rest);
-      }
-    }
-    const double cell = sxx > 0 ? std::max(0.0, sxy / sxx) : 0.0;
-    double rr = 0;
-    for (const Run &r : runs) rr += std::pow((r.rest + cell * r.cells - r.cpu) / r.cpu, 2);
-    std::printf("    {%d, %.4g},    // [%.3f]\n", order, 1e9 * cell, runs.empty() ? 0.0 : std::sqrt(rr / runs.size()));
-    std::fflush(stdout);
-  }
-  return 0;
 }
 
 // Non-negative least squares min sum_r ((sum_j x_j A[r][j] - y_r) / w_r)^2 by enumerating the
@@ -467,71 +418,123 @@ std::pair<std::vector<double>, double> nnls_small(const std::vector<std::vector<
   return {best_x, std::sqrt(best / std::max<std::size_t>(1, A.size()))};
 }
 
-int grid_occupancy_fit(int order_lo, int order_hi, int reps)
+// Constants of the periodic single-level grid (kGridCost in calibration.cpp): for each order,
+// single-thread CPU times (minimum of reps) of grid evaluations of uniform, Plummer and
+// two-cluster points (N = 1e3, 3e3, 1e4, 3e4, scaled into the cell [-1,1]^3, neutral) on every
+// grid of k^3 cells (k <= 12, up to max_grid_cells) with 4 to 1000 points per cell on average,
+// minus the octree-fitted point, pair and entry terms of their actual counts (grid_counts),
+// fitted by non-negative least squares of the relative residuals to a * cells (every cell: its
+// share of the convolution) + b * occupied cells (P2M, both surface FFTs and L2P are skipped
+// for empty cells) + c * N + s * pair * self pairs (a cell with itself costs more than the
+// octree's self-pair weight: the dense cells of clustered points). Prints the rows of
+// kGridCost with the RMS residual, overall and per point set, and for comparison the residual
+// of the fit of a * cells alone.
+struct GridRun {
+  int set;    // 0 uniform, 1 Plummer, 2 two clusters
+  double n, cells, occupied, self_pairs, cpu, rest;
+};
+
+// Prints the row of kGridCost fitted to the runs of one order (see grid_cost_fit)
+void print_grid_row(int order, const std::vector<GridRun> &runs)
 {
-  const char *sets[3] = {"uniform", "plummer", "clusters"};
+  const double pair = cost_constants(order).pair;
+  // fit of the first `terms` columns (cells, occupied, N, pair * self pairs)
+  auto fit = [&](int terms) {
+    std::vector<std::vector<double>> A;
+    std::vector<double> y, w;
+    for (const GridRun &r : runs) {
+      const double cols[4] = {r.cells, r.occupied, r.n, pair * r.self_pairs};
+      A.emplace_back(cols, cols + terms);
+      y.push_back(r.cpu - r.rest);
+      w.push_back(r.cpu);
+    }
+    std::vector<double> x = nnls_small(A, y, w).first;
+    x.resize(4, 0.0);
+    return x;
+  };
+  auto residuals = [&](const std::vector<double> &x) {
+    std::array<double, 4> rr{}, cnt{};
+    for (const GridRun &r : runs) {
+      const double f = r.rest + x[0] * r.cells + x[1] * r.occupied + x[2] * r.n + x[3] * pair * r.self_pairs;
+      const double e = std::pow((f - r.cpu) / r.cpu, 2);
+      rr[0] += e, cnt[0] += 1;
+      rr[1 + r.set] += e, cnt[1 + r.set] += 1;
+    }
+    for (int i = 0; i < 4; ++i) rr[i] = cnt[i] > 0 ? std::sqrt(rr[i] / cnt[i]) : 0.0;
+    return rr;
+  };
+  const std::vector<double> x = fit(4);
+  const std::array<double, 4> r = residuals(x);
+  std::printf("    {%d, %.4g, %.4g, %.4g, %.3g},    // [%.3f; %.3f %.3f %.3f] (cells alone: %.3f)\n", order, 1e9 * x[0],
+              1e9 * x[1], 1e9 * x[2], x[3], r[0], r[1], r[2], r[3], residuals(fit(1))[0]);
+  std::fflush(stdout);
+}
+
+const char *const kGridSets[3] = {"uniform", "plummer", "clusters"};
+const char *const kGridHeader =
+    "    // order, cell, occupied cell, point (ns), self   [rms relative residual: all; uniform plummer clusters]\n";
+
+int grid_cost_fit(int order_lo, int order_hi, int reps)
+{
+  std::printf("%s", kGridHeader);
   for (int order = order_lo; order <= order_hi; ++order) {
-    struct Run {
-      int set;
-      double n, cells, occupied, cpu, rest;
-    };
-    std::vector<Run> runs;
+    std::vector<GridRun> runs;
     for (int set = 0; set < 3; ++set)
-      for (double nd : {1e3, 3e3, 1e4}) {
+      for (double nd : {1e3, 3e3, 1e4, 3e4}) {
         const std::size_t n = (std::size_t) nd;
         const bench::Points p = bench::into_periodic_cell(set == 0   ? bench::uniform(n, 7)
                                                               : set == 1 ? kifmm_points::plummer(n, 7)
                                                                          : kifmm_points::two_clusters(n, 7));
-        for (int k = 3; k <= std::min(7, max_grid_cells_long(order, nullptr)); ++k) {
-          if (nd / (k * k * k) < 4) continue;
+        for (int k = 3; k <= std::min(12, max_grid_cells_long(order, nullptr)); ++k) {
+          const double m = nd / (k * k * k);
+          if (m < 4 || m > 1000) continue;
           const double best = grid_evaluation_seconds(order, k, p, reps, 0.05);
           const double center[3] = {0, 0, 0};
           const TreeCounts t = grid_counts(n, p.xyz.data(), center, 1.0, k);
-          std::vector<int> occ(k * k * k, 0);
-          for (std::size_t i = 0; i < n; ++i) occ[grid_cell_index(&p.xyz[3 * i], center, 1.0, k)] = 1;
-          double occupied = 0;
-          for (int v : occ) occupied += v;
           const CostConstants c = cost_constants(order);
           const double rest = c.point * nd + c.pair * (t.near_pairs + self_pair_extra() * t.self_pairs) + c.entry * t.entries;
-          runs.push_back({set, nd, t.cells, occupied, best, rest});
-          std::fprintf(stderr, "order %d %s N %zu k %d: occupied %g of %g cells, cpu %.5f s, point/pair/entry terms %.5f s\n",
-                       order, sets[set], n, k, occupied, t.cells, best, rest);
+          runs.push_back({set, nd, t.cells, t.occupied_cells, t.self_pairs, best, rest});
+          std::fprintf(stderr,
+                       "order %d %s N %zu k %d: occupied %g of %g cells, cpu %.5f s, point/pair/entry terms %.5f s"
+                       " (near pairs %.6g, self pairs %.6g, entries %g)\n",
+                       order, kGridSets[set], n, k, t.occupied_cells, t.cells, best, rest, t.near_pairs, t.self_pairs,
+                       t.entries);
         }
       }
-    std::printf("order %d:", order);
-    for (int terms = 1; terms <= 3; ++terms) {
-      std::vector<std::vector<double>> A;
-      std::vector<double> y, w;
-      for (const Run &r : runs) {
-        std::vector<double> row{r.cells};
-        if (terms >= 2) row.push_back(r.occupied);
-        if (terms >= 3) row.push_back(r.n);
-        A.push_back(row);
-        y.push_back(r.cpu - r.rest);
-        w.push_back(r.cpu);
-      }
-      const auto [x, rms] = nnls_small(A, y, w);
-      std::printf("  | %s: a %.4g ns", terms == 1 ? "cells" : terms == 2 ? "cells + occupied" : "cells + occupied + N", 1e9 * x[0]);
-      if (terms >= 2) std::printf(", b %.4g ns", 1e9 * x[1]);
-      if (terms >= 3) std::printf(", c %.4g ns", 1e9 * x[2]);
-      std::printf(" [rms %.3f;", rms);
-      for (int set = 0; set < 3; ++set) {
-        double rr = 0;
-        int cnt = 0;
-        for (std::size_t r = 0; r < runs.size(); ++r) {
-          if (runs[r].set != set) continue;
-          double f = runs[r].rest;
-          for (std::size_t j = 0; j < x.size(); ++j) f += x[j] * A[r][j];
-          rr += std::pow((f - runs[r].cpu) / runs[r].cpu, 2);
-          ++cnt;
-        }
-        std::printf(" %s %.3f", sets[set], cnt ? std::sqrt(rr / cnt) : 0.0);
-      }
-      std::printf("]");
-    }
-    std::printf("\n");
-    std::fflush(stdout);
+    print_grid_row(order, runs);
   }
+  return 0;
+}
+
+// The same fit from the stderr of an earlier --grid-cost run (the constants of kCost now in use)
+int grid_cost_refit(const char *log)
+{
+  std::FILE *f = std::fopen(log, "r");
+  if (!f) {
+    std::fprintf(stderr, "cannot read %s\n", log);
+    return 1;
+  }
+  std::vector<std::vector<GridRun>> by_order(32);
+  char line[512], set[32];
+  while (std::fgets(line, sizeof line, f)) {
+    int order, k;
+    double n, occupied, cells, cpu, rest, near, self, entries;
+    if (std::sscanf(line,
+                    "order %d %31s N %lf k %d: occupied %lf of %lf cells, cpu %lf s, point/pair/entry terms %lf s"
+                    " (near pairs %lf, self pairs %lf, entries %lf)",
+                    &order, set, &n, &k, &occupied, &cells, &cpu, &rest, &near, &self, &entries) != 11 ||
+        order < 0 || order >= 32)
+      continue;
+    int s = 0;
+    while (s < 2 && std::strcmp(set, kGridSets[s])) ++s;
+    const CostConstants c = cost_constants(order);
+    rest = c.point * n + c.pair * (near + self_pair_extra() * self) + c.entry * entries;
+    by_order[order].push_back({s, n, cells, occupied, self, cpu, rest});
+  }
+  std::fclose(f);
+  std::printf("%s", kGridHeader);
+  for (int order = 0; order < 32; ++order)
+    if (!by_order[order].empty()) print_grid_row(order, by_order[order]);
   return 0;
 }
 
@@ -539,16 +542,9 @@ int grid_occupancy_fit(int order_lo, int order_hi, int reps)
 
 int main(int argc, char **argv)
 {
-  if (argc > 1 && !std::strcmp(argv[1], "--grid-occupancy")) {
-    int lo = 9, hi = 13, reps = 2;
-    for (int i = 2; i + 1 < argc; i += 2) {
-      if (!std::strcmp(argv[i], "--orders")) std::sscanf(argv[i + 1], "%d-%d", &lo, &hi);
-      else if (!std::strcmp(argv[i], "--reps")) reps = std::atoi(argv[i + 1]);
-    }
-    return grid_occupancy_fit(lo, hi, reps);
-  }
+  if (argc > 2 && !std::strcmp(argv[1], "--grid-refit")) return grid_cost_refit(argv[2]);
   if (argc > 1 && !std::strcmp(argv[1], "--grid-cost")) {
-    int lo = 3, hi = 10, reps = 3;
+    int lo = 3, hi = 14, reps = 3;
     for (int i = 2; i + 1 < argc; i += 2) {
       if (!std::strcmp(argv[i], "--orders")) std::sscanf(argv[i + 1], "%d-%d", &lo, &hi);
       else if (!std::strcmp(argv[i], "--reps")) reps = std::atoi(argv[i + 1]);

@@ -284,29 +284,29 @@ TreeCounts tree_counts(const Octree &tree, const InteractionLists &lists, const 
 // ---------------------------------------------------------------- periodic grid (cost_model.h)
 
 namespace {
-// Seconds per cell of the periodic single-level grid, in ns per order: produced by
-// `OMP_NUM_THREADS=1 ./bench/calibrate --grid-cost` (bench/calibrate.cpp; the point, pair and
-// entry terms are those of kCost), 2026-12-02 (orders 3-10) and 2026-12-04 (11-14), in
-// brackets the RMS relative residual over the grids with 8 to 1000 atoms per cell at N = 3e3,
-// 1e4, 3e4 (the per-cell work grows slowly with k: the convolution is O(log k) per cell, and
-// the spectra leave the caches).
+// Seconds per cell, per occupied cell and per point of the periodic single-level grid (ns), and
+// the extra weight of a pair inside one cell, per order: produced by `OMP_NUM_THREADS=1
+// ./bench/calibrate --grid-cost` (bench/calibrate.cpp; the point, pair and entry terms are those
+// of kCost; bench/results/grid_cost_fit_*), in brackets the RMS relative residual over uniform,
+// Plummer and two-cluster points, N = 1e3 to 3e4, grids with 4 to 1000 points per cell.
 struct GridRow {
   int order;
-  double cell;
+  double cell, occupied, point;    // ns
+  double self;                     // pair constants per self pair beyond the octree's weight
 };
 const GridRow kGridCost[] = {
-    {3, 2375},    // [0.207]
-    {4, 1734},    // [0.145]
-    {5, 1.227e+04},    // [0.107]
-    {6, 1.576e+04},    // [0.093]
-    {7, 3.689e+04},    // [0.067]
-    {8, 4.754e+04},    // [0.082]
-    {9, 1.112e+05},    // [0.054]
-    {10, 1.151e+05},    // [0.085]
-    {11, 1.979e+05},    // [0.142]  orders 11-14: grid_cost_fit_2026-12-04_orders11-14.txt
-    {12, 2.298e+05},    // [0.108]
-    {13, 3.179e+05},    // [0.101]
-    {14, 3.89e+05},    // [0.103]
+    {3, 0, 0, 0, 0.3},    // [0.401; 0.173 0.237 0.629] (cells alone: 0.406)
+    {4, 0, 0, 0, 0.813},    // [0.280; 0.105 0.198 0.430] (cells alone: 0.320)
+    {5, 0, 5465, 61.45, 0.876},    // [0.172; 0.127 0.211 0.169] (cells alone: 0.274)
+    {6, 3612, 8036, 15.46, 1},    // [0.148; 0.128 0.182 0.128] (cells alone: 0.245)
+    {7, 1.081e+04, 1.587e+04, 122.6, 0.999},    // [0.149; 0.145 0.168 0.134] (cells alone: 0.265)
+    {8, 2.488e+04, 1.951e+04, 130.4, 0.93},    // [0.156; 0.160 0.165 0.142] (cells alone: 0.246)
+    {9, 3.973e+04, 5.418e+04, 295.5, 0.854},    // [0.129; 0.102 0.147 0.135] (cells alone: 0.285)
+    {10, 5.713e+04, 3.473e+04, 417.6, 0.663},    // [0.138; 0.128 0.156 0.129] (cells alone: 0.236)
+    {11, 8.765e+04, 8.836e+04, 651.5, 0.811},    // [0.110; 0.081 0.126 0.118] (cells alone: 0.276)
+    {12, 1.267e+05, 9.329e+04, 469.1, 0.867},    // [0.099; 0.080 0.102 0.113] (cells alone: 0.237)
+    {13, 1.813e+05, 1.16e+05, 727.3, 0.885},    // [0.100; 0.082 0.095 0.120] (cells alone: 0.239)
+    {14, 2.332e+05, 1.684e+05, 840.1, 0.772},    // [0.083; 0.055 0.085 0.101] (cells alone: 0.233)
 };
 }    // namespace
 
@@ -337,6 +337,7 @@ TreeCounts uniform_grid_counts(std::size_t n, int k, const double *shape)
   t.self_pairs = cells * m * m / 2;
   t.entries = 14 * cells;
   t.cells = grid_modelled_cells(kd, false);
+  t.occupied_cells = cells * -std::expm1(-m);
   return t;
 }
 
@@ -353,6 +354,7 @@ TreeCounts grid_counts(std::size_t n, const double *xyz, const double center[3],
   t.entries = 14.0 * kc;
   for (int b = 0; b < kc; ++b) {
     if (occ[b] == 0) continue;
+    t.occupied_cells += 1;
     for (int o = 0; o < 27; ++o) {
       const int dz = o % 3 - 1, az = b % kd[2] + dz;
       if (open_z && (az < 0 || az >= kd[2])) continue;    // no images along z
@@ -364,19 +366,20 @@ TreeCounts grid_counts(std::size_t n, const double *xyz, const double center[3],
   return t;
 }
 
-double grid_cell_cost(int order)
+GridCostConstants grid_cost_constants(int order)
 {
   const GridRow *r = &kGridCost[0];
   for (const GridRow &g : kGridCost)
     if (g.order <= order) r = &g;
-  return 1e-9 * r->cell;
+  return {1e-9 * r->cell, 1e-9 * r->occupied, 1e-9 * r->point, r->self};
 }
 
 double modelled_grid_cost(int order, std::size_t n, const TreeCounts &t, double pair_weight)
 {
   const CostConstants c = cost_constants(order);
-  return c.point * (double) n + pair_weight * c.pair * (t.near_pairs + kSelfExtra * t.self_pairs) +
-      c.entry * t.entries + grid_cell_cost(order) * t.cells;
+  const GridCostConstants g = grid_cost_constants(order);
+  return (c.point + g.point) * (double) n + pair_weight * c.pair * (t.near_pairs + (kSelfExtra + g.self) * t.self_pairs) +
+      c.entry * t.entries + g.cell * t.cells + g.occupied * t.occupied_cells;
 }
 
 int max_grid_cells(int order)
@@ -428,12 +431,10 @@ TreeChoice choose_slab_grid(int order, std::size_t n, const double shape[3])
     if (!grid_fits_cell(order, k, shape, true)) continue;
     int kd[3];
     grid_cells_per_axis(k, shape, kd);
-    // uniform counts of the cells (the near field of the z boundary cells counted as inside)
-    TreeCounts t;
-    const double cells = (double) kd[0] * kd[1] * kd[2], m = (double) n / cells;
-    t.near_pairs = 27 * cells * m * m / 2;
-    t.self_pairs = cells * m * m / 2;
-    t.entries = 14 * cells;
+    // uniform counts of the cells; the two z boundary layers have no neighbours across the
+    // open faces (on average 9 (3 - 2 / kz) neighbour cells)
+    TreeCounts t = uniform_grid_counts(n, k, shape);
+    t.near_pairs *= (3.0 - 2.0 / kd[2]) / 3.0;
     t.cells = grid_modelled_cells(kd, true);    // the padded convolution
     const double c = modelled_grid_cost(order, n, t);
     if (g.grid == 0 || c < g.cost) {

@@ -50,6 +50,7 @@ struct TreeCounts {
   // not stay in the per-core cache (m2l_parent_pairs streams them once per colleague slot),
   // each weighted by log2(cells of the level / m2l_cached_cells())
   double spilled_translations = 0;
+  double occupied_cells = 0;    // periodic grid: cells holding points (P2M, surface FFTs, L2P)
 };
 
 // Cells of one level whose 16-frequency blocks (source and target: 512 bytes per cell) fit in
@@ -98,10 +99,13 @@ TreeCounts actual_tree_counts(const KernelSpec &kernel, const Options &options, 
 
 // Periodic single-level grid of k^3 cells (periodic_grid.h, Laplace): near = every cell with
 // itself and its 26 neighbours (mutual), self = pairs inside one cell, entries = 14 per cell,
-// cells = k^3 (P2M, two surface FFTs, its share of the convolution over the cells, L2P),
-// translations = 0. cost = point * n + pair * (near + self_extra * self) + entry * entries +
-// grid_cell * cells: the octree's constants and one per-order constant per grid cell
-// (grid_cell_cost, fitted by `bench/calibrate --grid-cost`).
+// cells = k^3 (its share of the convolution over the cells), occupied_cells = the cells holding
+// points (only they run P2M, the two surface FFTs and L2P; expected (1 - e^-m) k^3 for m uniform
+// points per cell), translations = 0. cost = point * n + pair * (near + (self_extra + grid self)
+// * self) + entry * entries + grid cell * cells + grid occupied * occupied_cells + grid point *
+// n: the octree's constants and four per-order constants of the grid (GridCostConstants, fitted
+// by `bench/calibrate --grid-cost`; a dense cell with itself costs about twice the octree's
+// self-pair weight).
 // shape: a rectangular periodic cell (grid_cells_per_axis; null: a cube).
 TreeCounts uniform_grid_counts(std::size_t n, int k, const double *shape = nullptr);
 // The same for points wrapped into the cell [center - h, center + h)^3 (actual occupancies).
@@ -109,7 +113,11 @@ TreeCounts uniform_grid_counts(std::size_t n, int k, const double *shape = nullp
 // over twice the cells).
 TreeCounts grid_counts(std::size_t n, const double *xyz, const double center[3], double half_width, int k,
                        const double *shape = nullptr, bool open_z = false);
-double grid_cell_cost(int order);    // seconds
+struct GridCostConstants {
+  double cell = 0, occupied = 0, point = 0;    // seconds each
+  double self = 0;    // a pair inside one cell costs (1 + self_pair_extra() + self) pairs
+};
+GridCostConstants grid_cost_constants(int order);
 // Cells of a grid as the model counts them: kd[0] kd[1] kd[2] (open_z: twice, the convolution
 // is zero-padded along z), times kGridPrimeLengthFactor when a length of the DFT over the cells
 // has a prime factor above 13 (FFTW has straight-line codelets up to 13; longer prime factors

@@ -133,9 +133,9 @@ void KSpaceKIFMM::update_slab_extent()
   if (!std::isfinite(all[0]) || !std::isfinite(all[1]))
     error->all(FLERR, "kspace_style kifmm: an atom has a non-finite z coordinate (step {})", update->ntimestep);
   const double need[2] = {all[0], -all[1]}, pad = 0.05 * domain->prd[2];
-  if (slab_extent_set && slab_extent[0] <= need[0] && slab_extent[1] >= need[1] && slab_extent[0] >= need[0] - 2 * pad &&
-      slab_extent[1] <= need[1] + 2 * pad)
-    return;
+  const bool covers = slab_extent[0] <= need[0] && slab_extent[1] >= need[1];
+  const bool snug = slab_extent[0] >= need[0] - 2 * pad && slab_extent[1] <= need[1] + 2 * pad;
+  if (slab_extent_set && covers && snug) return;
   const bool inside = need[0] >= domain->boxlo[2] && need[1] <= domain->boxhi[2];
   slab_extent_set = !inside;
   if (inside) return;

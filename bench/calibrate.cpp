@@ -14,8 +14,9 @@
 // clustered points (open, bounding cube; two Plummer spheres, N = 1e4, 3e4, leaf sizes 16 ..
 // 4096), then the
 // non-negative least-squares fit (relative residuals) of cost = point*N + pair*(near +
-// self_extra*self) + translation*trans + cell*cells + entry*entries to them, with the counts of
-// the actual trees (actual_tree_counts, cost_model.h).
+// self_extra*self) + translation*trans + cell*cells + entry*entries + spill*spilled +
+// periodic*[periodic] + periodic_cell*[periodic]*cells to them, with the counts of the actual
+// trees (actual_tree_counts, cost_model.h).
 // Prints the table rows (ns) on stdout, the measured and fitted times on stderr.
 // `--only-n N` measures only the point sets of that size (to add them to a log for --refit).
 // `calibrate --refit COST.err [--shared-entry]` fits again from those measured times (stderr of
@@ -107,16 +108,17 @@ Options cost_options(const CostSet &set, int order, int leaf, bool periodic)
   return o;
 }
 
-constexpr int kCostColumns = 6;
+constexpr int kCostColumns = 8;
 using CostRowValues = std::array<double, kCostColumns>;
 
-// the columns of the fit for one tree: n, near (+ self extra), translations, cells, entries, spilled
+// the columns of the fit for one tree: n, near (+ self extra), translations, cells, entries,
+// spilled, periodic (1 or 0), periodic cells
 CostRowValues cost_columns(const CostSet &set, const Options &o)
 {
   const std::size_t n = set.p.size();
   const TreeCounts c = actual_tree_counts(KernelSpec{}, o, n, set.p.xyz.data(), o.leaf_size);
   return {(double) n, c.near_pairs + self_pair_extra() * c.self_pairs, c.translations, c.cells, c.entries,
-          c.spilled_translations};
+          c.spilled_translations, c.periodic, c.periodic_cells};
 }
 
 // Non-negative least squares of the relative residuals (each equation divided by its time,
@@ -178,8 +180,8 @@ double fit_cost_row(int order, const std::vector<CostRowValues> &rows, const std
                  "model %.4f s\n",
                  order, labels[i].c_str(), rows[i][1], rows[i][2], rows[i][3], rows[i][4], rows[i][5], times[i], f);
   }
-  std::printf("    {%d, %.4g, %.4g, %.4g, %.4g, %.4g, %.4g},    // [%.3f]\n", order, 1e9 * c[0], 1e9 * c[1],
-              1e9 * c[2], 1e9 * c[3], 1e9 * c[4], 1e9 * c[5], std::sqrt(rms / ne));
+  std::printf("    {%d, %.4g, %.4g, %.4g, %.4g, %.4g, %.4g, %.4g, %.4g},    // [%.3f]\n", order, 1e9 * c[0],
+              1e9 * c[1], 1e9 * c[2], 1e9 * c[3], 1e9 * c[4], 1e9 * c[5], 1e9 * c[6], 1e9 * c[7], std::sqrt(rms / ne));
   std::fflush(stdout);
   std::fflush(stderr);
   return rms;
@@ -195,7 +197,7 @@ std::string cost_label(const CostSet &set, int leaf, int depth, bool periodic)
 
 int cost_fit(int order_lo, int order_hi, int reps, std::size_t only_n)
 {
-  std::printf("    // order, point, pair, translation, cell, entry, spill (ns)   [rms relative residual of the fit]\n");
+  std::printf("    // order, point, pair, translation, cell, entry, spill, periodic, periodic cell (ns)   [rms relative residual of the fit]\n");
   const std::vector<CostSet> sets = cost_sets();
   for (int order = order_lo; order <= order_hi; ++order) {
     std::vector<CostRowValues> rows;
@@ -286,7 +288,7 @@ int cost_refit(const char *path, bool shared_entry)
         entry = e;
       }
     }
-  std::printf("    // order, point, pair, translation, cell, entry, spill (ns)   [rms relative residual of the fit]\n");
+  std::printf("    // order, point, pair, translation, cell, entry, spill, periodic, periodic cell (ns)   [rms relative residual of the fit]\n");
   if (shared_entry) std::printf("    // entry: one constant for all orders, %.0f ns (least squares over all orders)\n", 1e9 * entry);
   for (auto &[order, r] : rows) fit_cost_row(order, r, times[order], labels[order], entry);
   return 0;

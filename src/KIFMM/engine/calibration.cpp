@@ -80,7 +80,7 @@ Choice choose_order(const KernelSpec &, double rel_force_error, bool periodic)
 
 namespace {
 // Per-order constants of the cost model in nanoseconds: point, near-field pair, M2L translation,
-// cell, entry, spill (cost_model.h). Produced by `OMP_NUM_THREADS=1 ./bench/calibrate --cost`
+// cell, entry, spill, periodic evaluation, periodic cell (cost_model.h). Produced by `OMP_NUM_THREADS=1 ./bench/calibrate --cost`
 // (bench/calibrate.cpp; the spill column by `calibrate --refit` of its measured times):
 // non-negative least squares over measured single-thread CPU times of evaluations of uniform
 // points (both boundaries, N = 3e3 - 1e5, and 1e6 at order 3; depths with 8 to 4000 points per
@@ -93,21 +93,21 @@ namespace {
 // from 0 to 4.9 us with the noise of the high orders and decided depth 0 against depth 1.
 struct CostRow {
   int order;
-  double point, pair, translation, cell, entry, spill;
+  double point, pair, translation, cell, entry, spill, periodic, periodic_cell;
 };
 const CostRow kCost[] = {
-    {3, 158, 0.6066, 37.07, 2389, 200, 17.56},    // [0.082]
-    {4, 136.7, 0.6062, 65.92, 7001, 200, 0},    // [0.066]
-    {5, 144.4, 0.6071, 90.3, 1.264e+04, 200, 0},    // [0.082]
-    {6, 128.7, 0.6099, 222.8, 2.069e+04, 200, 0},    // [0.075]
-    {7, 100.8, 0.6323, 293.2, 4.632e+04, 200, 0},    // [0.079]
-    {8, 88.7, 0.6496, 456.1, 7.501e+04, 200, 0},    // [0.096]
-    {9, 83.59, 0.6525, 0, 1.889e+05, 200, 0},    // [0.112]
-    {10, 65.36, 0.6603, 170, 2.336e+05, 200, 0},    // [0.120]
-    {11, 61.5, 0.6616, 0, 3.77e+05, 200, 0},    // [0.122]
-    {12, 53.29, 0.6698, 0, 4.729e+05, 200, 0},    // [0.139]
-    {13, 40.31, 0.6863, 0, 6.268e+05, 200, 0},    // [0.152]
-    {14, 17.72, 0.7076, 0, 8.422e+05, 200, 0},    // [0.197]
+    {3, 160.9, 0.6022, 24.94, 1170, 300, 18.6, 0, 3504},    // [0.069]
+    {4, 137.3, 0.6027, 61.12, 4927, 300, 0, 8.124e+04, 3243},    // [0.060]
+    {5, 133.2, 0.6063, 75.78, 1.105e+04, 300, 0, 5.179e+04, 8653},    // [0.067]
+    {6, 123.3, 0.6081, 225.1, 1.745e+04, 300, 0, 2.152e+05, 5533},    // [0.067]
+    {7, 96.11, 0.6295, 307.3, 4.164e+04, 300, 0, 4.49e+05, 5792},    // [0.068]
+    {8, 83.22, 0.6463, 466.5, 6.924e+04, 300, 0, 5.398e+05, 1.532e+04},    // [0.082]
+    {9, 79.91, 0.6435, 0, 1.793e+05, 300, 0, 1.423e+06, 6.575e+04},    // [0.065]
+    {10, 65.21, 0.6489, 126.9, 2.262e+05, 300, 0, 1.436e+06, 7.241e+04},    // [0.086]
+    {11, 64.67, 0.6486, 0, 3.616e+05, 300, 0, 1.837e+06, 1.132e+05},    // [0.087]
+    {12, 60.59, 0.6523, 0, 4.545e+05, 300, 0, 2.55e+06, 1.412e+05},    // [0.105]
+    {13, 49.11, 0.6678, 0, 6.029e+05, 300, 0, 2.568e+06, 2.01e+05},    // [0.121]
+    {14, 27.57, 0.6887, 0, 8.094e+05, 300, 0, 2.333e+06, 3.042e+05},    // [0.173]
 };
 
 // Pair-cost weights of the counts beyond the fitted constants, measured 2026-11-23 (one thread,
@@ -158,6 +158,7 @@ TreeCounts uniform_tree_counts(std::size_t n, int depth, bool periodic)
       t.translations += std::pow(4 * adjacent_1d(s / 2), 3) - std::pow(adjacent_1d(s), 3);
     t.spilled_translations += spill_weight(cells) * (t.translations - before);
   }
+  if (periodic) t.periodic = 1, t.periodic_cells = t.cells;
   return t;
 }
 
@@ -175,7 +176,8 @@ CostConstants cost_constants(int order)
   for (const CostRow &c : kCost)
     if (c.order <= order) r = &c;
   return CostConstants{1e-9 * r->point, 1e-9 * r->pair,  1e-9 * r->translation,
-                       1e-9 * r->cell,  1e-9 * r->entry, 1e-9 * r->spill};
+                       1e-9 * r->cell,  1e-9 * r->entry, 1e-9 * r->spill,
+                       1e-9 * r->periodic, 1e-9 * r->periodic_cell};
 }
 
 double m2l_cached_cells()
@@ -202,7 +204,8 @@ double modelled_cost(int order, std::size_t n, const TreeCounts &t, double pair_
 {
   const CostConstants c = cost_constants(order);
   return c.point * (double) n + pair_weight * c.pair * (t.near_pairs + kSelfExtra * t.self_pairs) + c.translation * t.translations +
-      c.cell * t.cells + c.entry * t.entries + c.spill * t.spilled_translations;
+      c.cell * t.cells + c.entry * t.entries + c.spill * t.spilled_translations + c.periodic * t.periodic +
+      c.periodic_cell * t.periodic_cells;
 }
 
 double modelled_cost(int order, std::size_t n, bool periodic, int depth, double pair_weight)
@@ -278,6 +281,7 @@ TreeCounts tree_counts(const Octree &tree, const InteractionLists &lists, const 
     }
     t.spilled_translations += spill_weight(tree.level_begin[l + 1] - tree.level_begin[l]) * (t.translations - before);
   }
+  if (periodic) t.periodic = 1, t.periodic_cells = t.cells;
   return t;
 }
 
@@ -295,18 +299,18 @@ struct GridRow {
   double self;                     // pair constants per self pair beyond the octree's weight
 };
 const GridRow kGridCost[] = {
-    {3, 0, 2572, 0, 0.451},    // [0.222; 0.087 0.238 0.289] (cells alone: 0.281)
-    {4, 0, 4891, 14.16, 0.634},    // [0.177; 0.089 0.249 0.157] (cells alone: 0.261)
-    {5, 2677, 6844, 70.67, 0.632},    // [0.170; 0.119 0.228 0.144] (cells alone: 0.251)
-    {6, 8057, 8519, 134.3, 0.659},    // [0.151; 0.132 0.185 0.130] (cells alone: 0.236)
-    {7, 1.543e+04, 1.677e+04, 167.1, 0.574},    // [0.151; 0.146 0.171 0.132] (cells alone: 0.246)
-    {8, 2.959e+04, 2.057e+04, 228.5, 0.566},    // [0.159; 0.162 0.169 0.145] (cells alone: 0.236)
-    {9, 4.479e+04, 5.582e+04, 184.5, 0.516},    // [0.132; 0.105 0.150 0.138] (cells alone: 0.264)
-    {10, 6.208e+04, 3.578e+04, 302.9, 0.457},    // [0.143; 0.130 0.160 0.136] (cells alone: 0.218)
-    {11, 9.38e+04, 9.12e+04, 357.8, 0.446},    // [0.115; 0.086 0.130 0.124] (cells alone: 0.242)
-    {12, 1.332e+05, 9.661e+04, 214.8, 0.498},    // [0.103; 0.083 0.106 0.116] (cells alone: 0.207)
-    {13, 1.903e+05, 1.206e+05, 372.2, 0.423},    // [0.102; 0.082 0.100 0.121] (cells alone: 0.198)
-    {14, 2.434e+05, 1.739e+05, 481.3, 0.367},    // [0.089; 0.060 0.093 0.108] (cells alone: 0.200)
+    {3, 0, 1092, 0, 0.37},    // [0.270; 0.087 0.231 0.398] (cells alone: 0.291)
+    {4, 0, 3599, 0, 0.59},    // [0.189; 0.095 0.233 0.208] (cells alone: 0.262)
+    {5, 1275, 6840, 82.55, 0.636},    // [0.170; 0.119 0.228 0.144] (cells alone: 0.253)
+    {6, 6651, 8507, 141.5, 0.666},    // [0.151; 0.132 0.185 0.130] (cells alone: 0.238)
+    {7, 1.402e+04, 1.674e+04, 175.1, 0.585},    // [0.151; 0.146 0.171 0.132] (cells alone: 0.247)
+    {8, 2.817e+04, 2.053e+04, 238.6, 0.578},    // [0.159; 0.162 0.169 0.145] (cells alone: 0.237)
+    {9, 4.331e+04, 5.565e+04, 203.9, 0.546},    // [0.132; 0.105 0.150 0.137] (cells alone: 0.266)
+    {10, 6.054e+04, 3.558e+04, 324.3, 0.494},    // [0.141; 0.130 0.159 0.134] (cells alone: 0.221)
+    {11, 9.215e+04, 9.084e+04, 384.4, 0.487},    // [0.114; 0.085 0.129 0.122] (cells alone: 0.244)
+    {12, 1.314e+05, 9.604e+04, 250.4, 0.553},    // [0.102; 0.082 0.105 0.115] (cells alone: 0.210)
+    {13, 1.882e+05, 1.2e+05, 415.2, 0.476},    // [0.101; 0.082 0.099 0.120] (cells alone: 0.202)
+    {14, 2.411e+05, 1.731e+05, 531.6, 0.416},    // [0.087; 0.059 0.091 0.105] (cells alone: 0.204)
 };
 }    // namespace
 

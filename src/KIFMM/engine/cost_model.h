@@ -17,8 +17,12 @@
 //   spilled = the translations of levels whose cells' frequency blocks exceed the per-core
 //           cache (m2l_cached_cells), weighted by log2 of the excess: their spectra come from
 //           the shared cache or memory, the more often the larger the level
+//   periodic, periodic_cells = 1 and cells with periodic boundaries (0 open): the fixed cost of
+//           a periodic evaluation and the extra cost of a periodic cell (their top levels sum
+//           the images; fitted, the open constants underestimated periodic trees by 20-25 % at
+//           orders 9-14)
 // cost = point * n + pair * (near + self_extra * self) + translation * trans + cell * cells
-//        + entry * entries + spill * spilled,
+//        + entry * entries + spill * spilled + periodic * 1 + periodic_cell * cells,
 // with per-order constants (seconds) fitted by `bench/calibrate --cost` to measured evaluations
 // (calibration.cpp). self_extra: a leaf with itself runs the one-sided loop over all m^2
 // ordered pairs (p2p_mutual.h, AVX-512), not m^2 / 2 mutual ones; it decides depth 0 against
@@ -51,6 +55,9 @@ struct TreeCounts {
   // each weighted by log2(cells of the level / m2l_cached_cells())
   double spilled_translations = 0;
   double occupied_cells = 0;    // periodic grid: cells holding points (P2M, surface FFTs, L2P)
+  // periodic octree: 1 (the fixed cost of an evaluation: the lattice operators of the top
+  // levels), and its cells again (a periodic cell costs more than an open one)
+  double periodic = 0, periodic_cells = 0;
 };
 
 // Cells of one level whose 16-frequency blocks (source and target: 512 bytes per cell) fit in
@@ -71,6 +78,7 @@ int leaf_size_for_depth(std::size_t n, int depth);
 
 struct CostConstants {
   double point = 0, pair = 0, translation = 0, cell = 0, entry = 0, spill = 0;    // seconds each
+  double periodic = 0, periodic_cell = 0;                                         // seconds each
 };
 CostConstants cost_constants(int order);
 
@@ -104,8 +112,8 @@ TreeCounts actual_tree_counts(const KernelSpec &kernel, const Options &options, 
 // points per cell), translations = 0. cost = point * n + pair * (near + (self_extra + grid self)
 // * self) + entry * entries + grid cell * cells + grid occupied * occupied_cells + grid point *
 // n: the octree's constants and four per-order constants of the grid (GridCostConstants, fitted
-// by `bench/calibrate --grid-cost`; a dense cell with itself costs about twice the octree's
-// self-pair weight).
+// by `bench/calibrate --grid-cost`; a dense cell with itself costs about 1.3-1.5 times the
+// octree's self-pair weight).
 // shape: a rectangular periodic cell (grid_cells_per_axis; null: a cube).
 TreeCounts uniform_grid_counts(std::size_t n, int k, const double *shape = nullptr);
 // The same for points wrapped into the cell [center - h, center + h)^3 (actual occupancies).

@@ -422,15 +422,16 @@ std::pair<std::vector<double>, double> nnls_small(const std::vector<std::vector<
 
 // Constants of the periodic single-level grid (kGridCost in calibration.cpp): for each order,
 // single-thread CPU times (minimum of reps) of grid evaluations of uniform, Plummer and
-// two-cluster points (N = 1e3, 3e3, 1e4, 3e4, scaled into the cell [-1,1]^3, neutral) on every
-// grid of k^3 cells (k <= 12, up to max_grid_cells) with 4 to 1000 points per cell on average,
-// minus the octree-fitted point, pair and entry terms of their actual counts (grid_counts),
-// fitted by non-negative least squares of the relative residuals to a * cells (every cell: its
-// share of the convolution) + b * occupied cells (P2M, both surface FFTs and L2P are skipped
-// for empty cells) + c * N + s * pair * self pairs (a cell with itself costs more than the
-// octree's self-pair weight: the dense cells of clustered points). Prints the rows of
-// kGridCost with the RMS residual, overall and per point set, and for comparison the residual
-// of the fit of a * cells alone.
+// two-cluster points (N = 1e3, 3e3, 1e4, 3e4, and uniform 1e5 at orders <= 6, scaled into the
+// cell [-1,1]^3, neutral) on every grid of k^3 cells (k <= 12, 24 at orders <= 6, up to
+// max_grid_cells) with 4 to 1000 points per cell on average, minus the octree-fitted point,
+// pair and entry terms of their actual counts (grid_counts), fitted by non-negative least
+// squares of the relative residuals to a * cells log2(cells) (every cell: its share of the
+// convolution, FFTs over the cells) + b * occupied cells (P2M, both surface FFTs and L2P are
+// skipped for empty cells) + c * N + s * pair * self pairs (a cell with itself costs more than
+// the octree's self-pair weight: the dense cells of clustered points). Prints the rows of
+// kGridCost with the RMS residual, overall and per point set, and for comparison the residuals
+// of the same fit with a * cells (no log2) and of a * cells alone.
 struct GridRun {
   int set;    // 0 uniform, 1 Plummer, 2 two clusters
   double n, cells, occupied, self_pairs, cpu, rest;
@@ -441,11 +442,11 @@ void print_grid_row(int order, const std::vector<GridRun> &runs)
 {
   const double pair = cost_constants(order).pair;
   // fit of the first `terms` columns (cells, occupied, N, pair * self pairs)
-  auto fit = [&](int terms) {
+  auto fit = [&](int terms, bool log_cells = true) {
     std::vector<std::vector<double>> A;
     std::vector<double> y, w;
     for (const GridRun &r : runs) {
-      const double cols[4] = {r.cells, r.occupied, r.n, pair * r.self_pairs};
+      const double cols[4] = {log_cells ? grid_convolution_cells(r.cells) : r.cells, r.occupied, r.n, pair * r.self_pairs};
       A.emplace_back(cols, cols + terms);
       y.push_back(r.cpu - r.rest);
       w.push_back(r.cpu);
@@ -454,10 +455,11 @@ void print_grid_row(int order, const std::vector<GridRun> &runs)
     x.resize(4, 0.0);
     return x;
   };
-  auto residuals = [&](const std::vector<double> &x) {
+  auto residuals = [&](const std::vector<double> &x, bool log_cells = true) {
     std::array<double, 4> rr{}, cnt{};
     for (const GridRun &r : runs) {
-      const double f = r.rest + x[0] * r.cells + x[1] * r.occupied + x[2] * r.n + x[3] * pair * r.self_pairs;
+      const double f = r.rest + x[0] * (log_cells ? grid_convolution_cells(r.cells) : r.cells) + x[1] * r.occupied +
+                       x[2] * r.n + x[3] * pair * r.self_pairs;
       const double e = std::pow((f - r.cpu) / r.cpu, 2);
       rr[0] += e, cnt[0] += 1;
       rr[1 + r.set] += e, cnt[1 + r.set] += 1;
@@ -467,8 +469,9 @@ void print_grid_row(int order, const std::vector<GridRun> &runs)
   };
   const std::vector<double> x = fit(4);
   const std::array<double, 4> r = residuals(x);
-  std::printf("    {%d, %.4g, %.4g, %.4g, %.3g},    // [%.3f; %.3f %.3f %.3f] (cells alone: %.3f)\n", order, 1e9 * x[0],
-              1e9 * x[1], 1e9 * x[2], x[3], r[0], r[1], r[2], r[3], residuals(fit(1))[0]);
+  std::printf("    {%d, %.4g, %.4g, %.4g, %.3g},    // [%.3f; %.3f %.3f %.3f] (cells without log2: %.3f; alone: %.3f)\n",
+              order, 1e9 * x[0], 1e9 * x[1], 1e9 * x[2], x[3], r[0], r[1], r[2], r[3], residuals(fit(4, false), false)[0],
+              residuals(fit(1, false), false)[0]);
   std::fflush(stdout);
 }
 
@@ -482,12 +485,13 @@ int grid_cost_fit(int order_lo, int order_hi, int reps)
   for (int order = order_lo; order <= order_hi; ++order) {
     std::vector<GridRun> runs;
     for (int set = 0; set < 3; ++set)
-      for (double nd : {1e3, 3e3, 1e4, 3e4}) {
+      for (double nd : {1e3, 3e3, 1e4, 3e4, 1e5}) {
+        if (nd > 3e4 && (order > 6 || set > 0)) continue;
         const std::size_t n = (std::size_t) nd;
         const bench::Points p = bench::into_periodic_cell(set == 0   ? bench::uniform(n, 7)
                                                               : set == 1 ? kifmm_points::plummer(n, 7)
                                                                          : kifmm_points::two_clusters(n, 7));
-        for (int k = 3; k <= std::min(12, max_grid_cells_long(order, nullptr)); ++k) {
+        for (int k = 3; k <= std::min(order > 6 ? 12 : 24, max_grid_cells_long(order, nullptr)); ++k) {
           const double m = nd / (k * k * k);
           if (m < 4 || m > 1000) continue;
           const double best = grid_evaluation_seconds(order, k, p, reps, 0.05);

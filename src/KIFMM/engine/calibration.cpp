@@ -80,10 +80,11 @@ Choice choose_order(const KernelSpec &, double rel_force_error, bool periodic)
 
 namespace {
 // Per-order constants of the cost model in nanoseconds: point, near-field pair, M2L translation,
-// cell, entry, spill, periodic evaluation, periodic cell (cost_model.h). Produced by `OMP_NUM_THREADS=1 ./bench/calibrate --cost`
-// (bench/calibrate.cpp; the spill column by `calibrate --refit` of its measured times):
-// non-negative least squares over measured single-thread CPU times of evaluations of uniform
-// points (both boundaries, N = 3e3 - 1e5, and 1e6 at order 3; depths with 8 to 4000 points per
+// cell, entry, spill, periodic evaluation, periodic cell (cost_model.h). Produced by
+// `OMP_NUM_THREADS=1 ./bench/calibrate --cost` (bench/calibrate.cpp; the rows in use by
+// `calibrate --refit LOG --shared-entry` of its measured times): non-negative least squares
+// over measured single-thread CPU times of evaluations of uniform points (both boundaries, N =
+// 1e3 - 1e5, and 1e6 at order 3; depths with 8 to 4000 points per
 // leaf) and of two Plummer spheres (open, leaf sizes 16-4096), with the counts of their actual
 // trees (actual_tree_counts); in brackets the RMS relative residual of the fit (provenance of
 // the measurement: bench/results/README.md). The translation and cell terms are nearly
@@ -288,29 +289,31 @@ TreeCounts tree_counts(const Octree &tree, const InteractionLists &lists, const 
 // ---------------------------------------------------------------- periodic grid (cost_model.h)
 
 namespace {
-// Seconds per cell, per occupied cell and per point of the periodic single-level grid (ns), and
+// Seconds per cell (times log2 of the cells), per occupied cell and per point of the periodic
+// single-level grid (ns), and
 // the extra weight of a pair inside one cell, per order: produced by `OMP_NUM_THREADS=1
 // ./bench/calibrate --grid-cost` (bench/calibrate.cpp; the point, pair and entry terms are those
 // of kCost; bench/results/grid_cost_fit_*), in brackets the RMS relative residual over uniform,
-// Plummer and two-cluster points, N = 1e3 to 3e4, grids with 4 to 1000 points per cell.
+// Plummer and two-cluster points, N = 1e3 to 3e4 (uniform 1e5 too at orders <= 6), grids with 4
+// to 1000 points per cell.
 struct GridRow {
   int order;
-  double cell, occupied, point;    // ns
+  double cell, occupied, point;    // ns (cell: per cells log2 cells)
   double self;                     // pair constants per self pair beyond the octree's weight
 };
 const GridRow kGridCost[] = {
-    {3, 0, 1092, 0, 0.37},    // [0.270; 0.087 0.231 0.398] (cells alone: 0.291)
-    {4, 0, 3599, 0, 0.59},    // [0.189; 0.095 0.233 0.208] (cells alone: 0.262)
-    {5, 1275, 6840, 82.55, 0.636},    // [0.170; 0.119 0.228 0.144] (cells alone: 0.253)
-    {6, 6651, 8507, 141.5, 0.666},    // [0.151; 0.132 0.185 0.130] (cells alone: 0.238)
-    {7, 1.402e+04, 1.674e+04, 175.1, 0.585},    // [0.151; 0.146 0.171 0.132] (cells alone: 0.247)
-    {8, 2.817e+04, 2.053e+04, 238.6, 0.578},    // [0.159; 0.162 0.169 0.145] (cells alone: 0.237)
-    {9, 4.331e+04, 5.565e+04, 203.9, 0.546},    // [0.132; 0.105 0.150 0.137] (cells alone: 0.266)
-    {10, 6.054e+04, 3.558e+04, 324.3, 0.494},    // [0.141; 0.130 0.159 0.134] (cells alone: 0.221)
-    {11, 9.215e+04, 9.084e+04, 384.4, 0.487},    // [0.114; 0.085 0.129 0.122] (cells alone: 0.244)
-    {12, 1.314e+05, 9.604e+04, 250.4, 0.553},    // [0.102; 0.082 0.105 0.115] (cells alone: 0.210)
-    {13, 1.882e+05, 1.2e+05, 415.2, 0.476},    // [0.101; 0.082 0.099 0.120] (cells alone: 0.202)
-    {14, 2.411e+05, 1.731e+05, 531.6, 0.416},    // [0.087; 0.059 0.091 0.105] (cells alone: 0.204)
+    {3, 0, 2379, 0, 0.351},    // [0.268; 0.218 0.215 0.366] (cells without log2: 0.268; alone: 0.306)
+    {4, 0, 5185, 0, 0.538},    // [0.223; 0.242 0.201 0.215] (cells without log2: 0.223; alone: 0.295)
+    {5, 252.1, 7153, 46.94, 0.613},    // [0.179; 0.191 0.185 0.156] (cells without log2: 0.185; alone: 0.267)
+    {6, 738.4, 9800, 129.7, 0.602},    // [0.158; 0.135 0.194 0.147] (cells without log2: 0.171; alone: 0.259)
+    {7, 1774, 1.508e+04, 242.7, 0.54},    // [0.132; 0.102 0.165 0.122] (cells without log2: 0.151; alone: 0.247)
+    {8, 3530, 1.773e+04, 366.1, 0.512},    // [0.132; 0.109 0.158 0.126] (cells without log2: 0.159; alone: 0.237)
+    {9, 5435, 5.299e+04, 376.7, 0.485},    // [0.113; 0.066 0.143 0.116] (cells without log2: 0.132; alone: 0.266)
+    {10, 7684, 3.389e+04, 532.4, 0.429},    // [0.121; 0.077 0.152 0.123] (cells without log2: 0.141; alone: 0.221)
+    {11, 1.209e+04, 8.908e+04, 639.1, 0.421},    // [0.098; 0.056 0.120 0.106] (cells without log2: 0.114; alone: 0.244)
+    {12, 1.714e+04, 9.473e+04, 595, 0.472},    // [0.086; 0.053 0.098 0.098] (cells without log2: 0.102; alone: 0.210)
+    {13, 2.612e+04, 1.176e+05, 805.8, 0.375},    // [0.078; 0.043 0.098 0.083] (cells without log2: 0.101; alone: 0.202)
+    {14, 3.461e+04, 1.747e+05, 918.3, 0.342},    // [0.080; 0.065 0.089 0.085] (cells without log2: 0.087; alone: 0.204)
 };
 }    // namespace
 
@@ -370,6 +373,11 @@ TreeCounts grid_counts(std::size_t n, const double *xyz, const double center[3],
   return t;
 }
 
+double grid_convolution_cells(double cells)
+{
+  return cells * std::log2(std::max(cells, 2.0));
+}
+
 GridCostConstants grid_cost_constants(int order)
 {
   const GridRow *r = &kGridCost[0];
@@ -383,7 +391,7 @@ double modelled_grid_cost(int order, std::size_t n, const TreeCounts &t, double 
   const CostConstants c = cost_constants(order);
   const GridCostConstants g = grid_cost_constants(order);
   return (c.point + g.point) * (double) n + pair_weight * c.pair * (t.near_pairs + (kSelfExtra + g.self) * t.self_pairs) +
-      c.entry * t.entries + g.cell * t.cells + g.occupied * t.occupied_cells;
+      c.entry * t.entries + g.cell * grid_convolution_cells(t.cells) + g.occupied * t.occupied_cells;
 }
 
 int max_grid_cells(int order)

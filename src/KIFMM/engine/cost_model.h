@@ -110,8 +110,9 @@ TreeCounts actual_tree_counts(const KernelSpec &kernel, const Options &options, 
 // cells = k^3 (its share of the convolution over the cells), occupied_cells = the cells holding
 // points (only they run P2M, the two surface FFTs and L2P; expected (1 - e^-m) k^3 for m uniform
 // points per cell), translations = 0. cost = point * n + pair * (near + (self_extra + grid self)
-// * self) + entry * entries + grid cell * cells + grid occupied * occupied_cells + grid point *
-// n: the octree's constants and four per-order constants of the grid (GridCostConstants, fitted
+// * self) + entry * entries + grid cell * cells log2(cells) (the FFTs over the cells) + grid
+// occupied * occupied_cells + grid point * n: the octree's constants and four per-order
+// constants of the grid (GridCostConstants, fitted
 // by `bench/calibrate --grid-cost`; a dense cell with itself costs about 1.3-1.5 times the
 // octree's self-pair weight).
 // shape: a rectangular periodic cell (grid_cells_per_axis; null: a cube).
@@ -126,6 +127,7 @@ struct GridCostConstants {
   double self = 0;    // a pair inside one cell costs (1 + self_pair_extra() + self) pairs
 };
 GridCostConstants grid_cost_constants(int order);
+double grid_convolution_cells(double cells);    // cells log2(cells): the cell term's count
 // Cells of a grid as the model counts them: kd[0] kd[1] kd[2] (open_z: twice, the convolution
 // is zero-padded along z), times kGridPrimeLengthFactor when a length of the DFT over the cells
 // has a prime factor above 13 (FFTW has straight-line codelets up to 13; longer prime factors

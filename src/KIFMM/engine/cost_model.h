@@ -113,8 +113,8 @@ TreeCounts actual_tree_counts(const KernelSpec &kernel, const Options &options, 
 // * self) + entry * entries + grid cell * cells log2(cells) (the FFTs over the cells) + grid
 // occupied * occupied_cells + grid point * n: the octree's constants and four per-order
 // constants of the grid (GridCostConstants, fitted
-// by `bench/calibrate --grid-cost`; a dense cell with itself costs about 1.3-1.5 times the
-// octree's self-pair weight).
+// by `bench/calibrate --grid-cost`; a dense cell with itself costs about 1.25-1.45 times
+// the octree's self-pair weight).
 // shape: a rectangular periodic cell (grid_cells_per_axis; null: a cube).
 TreeCounts uniform_grid_counts(std::size_t n, int k, const double *shape = nullptr);
 // The same for points wrapped into the cell [center - h, center + h)^3 (actual occupancies).

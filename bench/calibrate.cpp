@@ -503,8 +503,8 @@ int grid_cost_fit(int order_lo, int order_hi, int reps)
           std::fprintf(stderr,
                        "order %d %s N %zu k %d: occupied %g of %g cells, cpu %.5f s, point/pair/entry terms %.5f s"
                        " (near pairs %.6g, self pairs %.6g, entries %g)\n",
-                       order, kGridSets[set], n, k, t.occupied_cells, t.cells, best, rest, t.near_pairs, t.self_pairs,
-                       t.entries);
+                       order, kGridSets[set], n, k, t.occupied_cells * k * k * k / t.cells, t.cells, best, rest,
+                       t.near_pairs, t.self_pairs, t.entries);    // occupied: without the DFT-length factor
         }
       }
     print_grid_row(order, runs);
@@ -535,7 +535,8 @@ int grid_cost_refit(const char *log)
     while (s < 2 && std::strcmp(set, kGridSets[s])) ++s;
     const CostConstants c = cost_constants(order);
     rest = c.point * n + c.pair * (near + self_pair_extra() * self) + c.entry * entries;
-    by_order[order].push_back({s, n, cells, occupied, self, cpu, rest});
+    // occupied cells with the grid's DFT-length factor, as grid_counts counts them now
+    by_order[order].push_back({s, n, cells, occupied * cells / ((double) k * k * k), self, cpu, rest});
   }
   std::fclose(f);
   std::printf("%s", kGridHeader);

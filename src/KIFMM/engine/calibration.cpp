@@ -302,9 +302,9 @@ struct GridRow {
   double self;                     // pair constants per self pair beyond the octree's weight
 };
 const GridRow kGridCost[] = {
-    {3, 0, 2379, 0, 0.351},    // [0.268; 0.218 0.215 0.366] (cells without log2: 0.268; alone: 0.306)
-    {4, 0, 5185, 0, 0.538},    // [0.223; 0.242 0.201 0.215] (cells without log2: 0.223; alone: 0.295)
-    {5, 252.1, 7153, 46.94, 0.613},    // [0.179; 0.191 0.185 0.156] (cells without log2: 0.185; alone: 0.267)
+    {3, 0, 2430, 0, 0.351},    // [0.266; 0.212 0.215 0.366] (cells without log2: 0.266; alone: 0.306)
+    {4, 0, 5238, 0, 0.538},    // [0.219; 0.233 0.201 0.215] (cells without log2: 0.219; alone: 0.295)
+    {5, 239.6, 7326, 45.41, 0.618},    // [0.177; 0.187 0.186 0.153] (cells without log2: 0.183; alone: 0.267)
     {6, 738.4, 9800, 129.7, 0.602},    // [0.158; 0.135 0.194 0.147] (cells without log2: 0.171; alone: 0.259)
     {7, 1774, 1.508e+04, 242.7, 0.54},    // [0.132; 0.102 0.165 0.122] (cells without log2: 0.151; alone: 0.247)
     {8, 3530, 1.773e+04, 366.1, 0.512},    // [0.132; 0.109 0.158 0.126] (cells without log2: 0.159; alone: 0.237)
@@ -326,12 +326,16 @@ bool dft_length_has_codelets(int n)
 }
 }    // namespace
 
-double grid_modelled_cells(const int kd[3], bool open_z)
+double grid_length_factor(const int kd[3], bool open_z)
 {
-  const double cells = (double) kd[0] * kd[1] * (open_z ? 2 * kd[2] : kd[2]);
   const bool codelets = dft_length_has_codelets(kd[0]) && dft_length_has_codelets(kd[1]) &&
       dft_length_has_codelets(open_z ? 2 * kd[2] : kd[2]);
-  return codelets ? cells : kGridPrimeLengthFactor * cells;
+  return codelets ? 1.0 : kGridPrimeLengthFactor;
+}
+
+double grid_modelled_cells(const int kd[3], bool open_z)
+{
+  return grid_length_factor(kd, open_z) * kd[0] * kd[1] * (open_z ? 2 * kd[2] : kd[2]);
 }
 
 TreeCounts uniform_grid_counts(std::size_t n, int k, const double *shape)
@@ -344,7 +348,7 @@ TreeCounts uniform_grid_counts(std::size_t n, int k, const double *shape)
   t.self_pairs = cells * m * m / 2;
   t.entries = 14 * cells;
   t.cells = grid_modelled_cells(kd, false);
-  t.occupied_cells = cells * -std::expm1(-m);
+  t.occupied_cells = grid_length_factor(kd, false) * cells * -std::expm1(-m);
   return t;
 }
 
@@ -370,6 +374,7 @@ TreeCounts grid_counts(std::size_t n, const double *xyz, const double center[3],
     }
     t.self_pairs += occ[b] * occ[b] / 2;
   }
+  t.occupied_cells *= grid_length_factor(kd, open_z);
   return t;
 }
 
@@ -448,6 +453,7 @@ TreeChoice choose_slab_grid(int order, std::size_t n, const double shape[3])
     TreeCounts t = uniform_grid_counts(n, k, shape);
     t.near_pairs *= (3.0 - 2.0 / kd[2]) / 3.0;
     t.cells = grid_modelled_cells(kd, true);    // the padded convolution
+    t.occupied_cells *= grid_length_factor(kd, true) / grid_length_factor(kd, false);
     const double c = modelled_grid_cost(order, n, t);
     if (g.grid == 0 || c < g.cost) {
       g.cost = c;

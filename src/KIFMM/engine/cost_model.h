@@ -129,11 +129,14 @@ struct GridCostConstants {
 GridCostConstants grid_cost_constants(int order);
 double grid_convolution_cells(double cells);    // cells log2(cells): the cell term's count
 // Cells of a grid as the model counts them: kd[0] kd[1] kd[2] (open_z: twice, the convolution
-// is zero-padded along z), times kGridPrimeLengthFactor when a length of the DFT over the cells
-// has a prime factor above 13 (FFTW has straight-line codelets up to 13; longer prime factors
-// take its slower general algorithms: at order 8, 23 x 3 x 3 cells cost 1.2x as much per cell
-// as 24 x 3 x 3, bench/results/periodic_grid_dft_lengths.md).
+// is zero-padded along z), times grid_length_factor: kGridPrimeLengthFactor when a length of
+// the DFT over the cells has a prime factor above 13 (FFTW has straight-line codelets up to 13;
+// longer prime factors take its slower general algorithms: at order 8, 23 x 3 x 3 cells cost
+// 1.2x as much per cell as 24 x 3 x 3, bench/results/periodic_grid_dft_lengths.md), else 1.
+// The occupied cells are counted with the same factor: at orders 3-4 the fit puts the whole
+// per-cell work on them.
 constexpr double kGridPrimeLengthFactor = 1.25;
+double grid_length_factor(const int kd[3], bool open_z);
 double grid_modelled_cells(const int kd[3], bool open_z);
 double modelled_grid_cost(int order, std::size_t n, const TreeCounts &counts, double pair_weight = 1.0);
 // Largest grid (cells per side) offered at this order: its kernels (periodic_grid.h) and the

@@ -19,7 +19,7 @@
 //           the shared cache or memory, the more often the larger the level
 //   periodic, periodic_cells = 1 and cells with periodic boundaries (0 open): the fixed cost of
 //           a periodic evaluation and the extra cost of a periodic cell (their top levels sum
-//           the images; fitted, the open constants underestimated periodic trees by 20-25 % at
+//           the images; without them the model underestimates periodic trees by 20-25 % at
 //           orders 9-14)
 // cost = point * n + pair * (near + self_extra * self) + translation * trans + cell * cells
 //        + entry * entries + spill * spilled + periodic * 1 + periodic_cell * cells,

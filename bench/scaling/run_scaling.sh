@@ -8,7 +8,7 @@
 # locally essential trees below coarse frontier cells (top level forced to 2 and 3: frontier
 # cells much larger than leaves; KIFMM_BASE_BUILD=dir also runs a build of another commit
 # there, for comparison). Appends JSON lines to bench/scaling/results/scaling.jsonl (one per
-# measurement; each line records the machine's load average next to its times).
+# measurement, with its provenance).
 # KIFMM_SCALING_ONLY=dipoles runs only the point-dipole cases: the
 # same points with a charge and a moment each, and with charges only, on 1-8 ranks (open,
 # periodic octree and grid).

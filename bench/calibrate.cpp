@@ -432,6 +432,14 @@ std::pair<std::vector<double>, double> nnls_small(const std::vector<std::vector<
 // the octree's self-pair weight: the dense cells of clustered points). Prints the rows of
 // kGridCost with the RMS residual, overall and per point set, and for comparison the residuals
 // of the same fit with a * cells (no log2) and of a * cells alone.
+// the point, pair and entry terms of kCost for a grid's counts (the part of its time the grid's
+// own constants leave to the octree's)
+double octree_terms(int order, double n, double near, double self, double entries)
+{
+  const CostConstants c = cost_constants(order);
+  return c.point * n + c.pair * (near + self_pair_extra() * self) + c.entry * entries;
+}
+
 struct GridRun {
   int set;    // 0 uniform, 1 Plummer, 2 two clusters
   double n, cells, occupied, self_pairs, cpu, rest;
@@ -497,8 +505,7 @@ int grid_cost_fit(int order_lo, int order_hi, int reps)
           const double best = grid_evaluation_seconds(order, k, p, reps, 0.05);
           const double center[3] = {0, 0, 0};
           const TreeCounts t = grid_counts(n, p.xyz.data(), center, 1.0, k);
-          const CostConstants c = cost_constants(order);
-          const double rest = c.point * nd + c.pair * (t.near_pairs + self_pair_extra() * t.self_pairs) + c.entry * t.entries;
+          const double rest = octree_terms(order, nd, t.near_pairs, t.self_pairs, t.entries);
           runs.push_back({set, nd, t.cells, t.occupied_cells, t.self_pairs, best, rest});
           std::fprintf(stderr,
                        "order %d %s N %zu k %d: occupied %g of %g cells, cpu %.5f s, point/pair/entry terms %.5f s"
@@ -533,8 +540,7 @@ int grid_cost_refit(const char *log)
       continue;
     int s = 0;
     while (s < 2 && std::strcmp(set, kGridSets[s])) ++s;
-    const CostConstants c = cost_constants(order);
-    rest = c.point * n + c.pair * (near + self_pair_extra() * self) + c.entry * entries;
+    rest = octree_terms(order, n, near, self, entries);
     // occupied cells with the grid's DFT-length factor, as grid_counts counts them now
     by_order[order].push_back({s, n, cells, occupied * cells / ((double) k * k * k), self, cpu, rest});
   }

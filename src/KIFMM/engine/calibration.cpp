@@ -338,17 +338,20 @@ double grid_modelled_cells(const int kd[3], bool open_z)
   return grid_length_factor(kd, open_z) * kd[0] * kd[1] * (open_z ? 2 * kd[2] : kd[2]);
 }
 
-TreeCounts uniform_grid_counts(std::size_t n, int k, const double *shape)
+TreeCounts uniform_grid_counts(std::size_t n, int k, const double *shape, bool open_z)
 {
   TreeCounts t;
   int kd[3];
   grid_cells_per_axis(k, shape, kd);
   const double cells = (double) kd[0] * kd[1] * kd[2], m = (double) n / cells;
-  t.near_pairs = 27 * cells * m * m / 2;
+  // a slab: the two z boundary layers have no neighbours across the open faces (on average
+  // 9 (3 - 2 / kz) neighbour cells)
+  const double neighbours = open_z ? 9 * (3.0 - 2.0 / kd[2]) : 27.0;
+  t.near_pairs = neighbours * cells * m * m / 2;
   t.self_pairs = cells * m * m / 2;
   t.entries = 14 * cells;
-  t.cells = grid_modelled_cells(kd, false);
-  t.occupied_cells = grid_length_factor(kd, false) * cells * -std::expm1(-m);
+  t.cells = grid_modelled_cells(kd, open_z);
+  t.occupied_cells = grid_length_factor(kd, open_z) * cells * -std::expm1(-m);
   return t;
 }
 
@@ -446,15 +449,7 @@ TreeChoice choose_slab_grid(int order, std::size_t n, const double shape[3])
   TreeChoice g{choose_tree(order, n, false).leaf_size, 0, 0.0, 0};
   for (int k = 3; k <= max_grid_cells_long(order, shape); ++k) {
     if (!grid_fits_cell(order, k, shape, true)) continue;
-    int kd[3];
-    grid_cells_per_axis(k, shape, kd);
-    // uniform counts of the cells; the two z boundary layers have no neighbours across the
-    // open faces (on average 9 (3 - 2 / kz) neighbour cells)
-    TreeCounts t = uniform_grid_counts(n, k, shape);
-    t.near_pairs *= (3.0 - 2.0 / kd[2]) / 3.0;
-    t.cells = grid_modelled_cells(kd, true);    // the padded convolution
-    t.occupied_cells *= grid_length_factor(kd, true) / grid_length_factor(kd, false);
-    const double c = modelled_grid_cost(order, n, t);
+    const double c = modelled_grid_cost(order, n, uniform_grid_counts(n, k, shape, true));
     if (g.grid == 0 || c < g.cost) {
       g.cost = c;
       g.grid = k;

@@ -115,8 +115,9 @@ TreeCounts actual_tree_counts(const KernelSpec &kernel, const Options &options, 
 // constants of the grid (GridCostConstants, fitted
 // by `bench/calibrate --grid-cost`; a dense cell with itself costs about 1.25-1.45 times
 // the octree's self-pair weight).
-// shape: a rectangular periodic cell (grid_cells_per_axis; null: a cube).
-TreeCounts uniform_grid_counts(std::size_t n, int k, const double *shape = nullptr);
+// shape: a rectangular periodic cell (grid_cells_per_axis; null: a cube); open_z: a slab (as in
+// grid_counts below).
+TreeCounts uniform_grid_counts(std::size_t n, int k, const double *shape = nullptr, bool open_z = false);
 // The same for points wrapped into the cell [center - h, center + h)^3 (actual occupancies).
 // open_z: a slab (periodic in x and y only: no neighbours across the z faces, the convolution
 // over twice the cells).

@@ -48,11 +48,11 @@ double conformal_scale(double s, const double u[3])
 }
 double conformal_map(double s, const double u[3], double out[3])
 {
-  const double D = s * s * (1.0 + u[2]) + (1.0 - u[2]);
-  out[0] = 2.0 * s * u[0] / D;
-  out[1] = 2.0 * s * u[1] / D;
-  out[2] = (s * s * (1.0 + u[2]) - (1.0 - u[2])) / D;
-  return 2.0 * s / D;
+  const double lambda = conformal_scale(s, u);
+  out[0] = lambda * u[0];
+  out[1] = lambda * u[1];
+  out[2] = lambda * (s * s * (1.0 + u[2]) - (1.0 - u[2])) / (2.0 * s);
+  return lambda;
 }
 
 // The nodes of a grid drawn towards its pole by the factor s (1: the plain grid), in the

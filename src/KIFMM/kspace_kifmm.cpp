@@ -311,7 +311,7 @@ void KSpaceKIFMM::init_style_and_engine()
     const bool grid_only = periodic && (slab || !kifmm::octree_fits_cell(engine_options.root_shape));
     if (tree_choice_pending && grid_only)
       mesg += fmt::format("\n  order = {}, single-level grid chosen from the atom positions at the first "
-                          "evaluation (a box that is not nearly cubic: grids of nearly cubic cells, least "
+                          "evaluation (a box that is not nearly cubic: single-level grids, least "
                           "modelled cost; for {} uniformly spread atoms: {} cells)",
                           engine_options.order, nstrong, grid_cells_text(engine_options));
     else if (tree_choice_pending)

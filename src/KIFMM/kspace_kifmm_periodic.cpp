@@ -167,7 +167,8 @@ std::string KSpaceKIFMM::grid_cells_text(const kifmm::Options &o) const
   return fmt::format("{} x {} x {}", c[0], c[1], c[2]);
 }
 
-// The octree fits a nearly cubic box; a grid, cells that are nearly cubic.
+// The octree fits a nearly cubic box; a grid, cells at most kifmm::max_grid_cell_aspect times
+// longer than wide (within the grid memory bound).
 bool KSpaceKIFMM::periodic_fits(const kifmm::Options &o) const
 {
   if (o.periodic_dims == 2) return o.periodic_grid > 0 && kifmm::grid_fits_cell(o.order, o.periodic_grid, o.root_shape, true);
@@ -176,8 +177,8 @@ bool KSpaceKIFMM::periodic_fits(const kifmm::Options &o) const
 }
 
 // The tree of these options made to fit the box: the octree needs a box whose longest edge is
-// at most kifmm::max_cell_aspect times its shortest, a grid nearly cubic cells (the cells per
-// axis in proportion to the edges). What does not fit and was not given is replaced by the
+// at most kifmm::max_cell_aspect times its shortest, a grid cells whose longest edge is at most
+// kifmm::max_grid_cell_aspect times the shortest (the cells per axis in proportion to the edges). What does not fit and was not given is replaced by the
 // grid of least modelled cost that fits; what was given and does not fit is an error.
 void KSpaceKIFMM::fit_periodic_box(kifmm::Options &o)
 {
@@ -187,7 +188,7 @@ void KSpaceKIFMM::fit_periodic_box(kifmm::Options &o)
     error->all(FLERR,
                "kspace_style kifmm: 'kspace_modify kifmm grid no' (the octree) needs a nearly cubic "
                "periodic box (longest edge at most {} times the shortest); the box lengths are "
-               "{:.10g} {:.10g} {:.10g} (step {}): use 'grid auto' or a grid of nearly cubic cells",
+               "{:.10g} {:.10g} {:.10g} (step {}): use 'grid auto' or a single-level grid",
                kifmm::max_cell_aspect, L[0], L[1], L[2], update->ntimestep);
   if (o.periodic_grid > 0 && kset.grid > 0) {
     int c[3];
@@ -201,11 +202,11 @@ void KSpaceKIFMM::fit_periodic_box(kifmm::Options &o)
       }
     error->all(FLERR,
                "kspace_modify kifmm grid {}: in the box of lengths {:.10g} {:.10g} {:.10g} (step {}) "
-               "its {} x {} x {} cells are not nearly cubic (longest edge {:.4g} times the shortest, "
-               "at most {}) or exceed the grid memory bound at order {}; grids that fit (cells along "
-               "the longest edge): {}",
+               "its {} x {} x {} cells are too long for their width (longest edge {:.4g} times the "
+               "shortest, at most {}) or exceed the grid memory bound at order {}; grids that fit "
+               "(cells along the longest edge): {}",
                kset.grid, L[0], L[1], L[2], update->ntimestep, c[0], c[1], c[2],
-               kifmm::grid_cell_aspect(c, o.root_shape), kifmm::max_cell_aspect, o.order,
+               kifmm::grid_cell_aspect(c, o.root_shape), kifmm::max_grid_cell_aspect, o.order,
                fit.empty() ? std::string("none") : fit);
   }
   o.periodic_grid = o.periodic_dims == 2 ? kifmm::choose_slab_grid(o.order, tree_request.n, o.root_shape).grid
@@ -217,7 +218,7 @@ void KSpaceKIFMM::fit_periodic_box(kifmm::Options &o)
       kset.grid < 0) {
     if (comm->me == 0 && !warned_octree_fallback)
       error->warning(FLERR,
-                     "kspace_style kifmm: at order {} no single-level grid of nearly cubic cells fits the "
+                     "kspace_style kifmm: at order {} no single-level grid fits the "
                      "periodic box of lengths {:.10g} {:.10g} {:.10g}; the octree is used (cells of the "
                      "box's shape, longest edge {:.4g} times the shortest: larger errors at this order)",
                      o.order, L[0], L[1], L[2], aspect);
@@ -226,10 +227,10 @@ void KSpaceKIFMM::fit_periodic_box(kifmm::Options &o)
   }
   if (o.periodic_grid == 0)
     error->all(FLERR,
-               "kspace_style kifmm: no single-level grid of nearly cubic cells fits the periodic box "
-               "of lengths {:.10g} {:.10g} {:.10g} (step {}) within the grid memory bound at order {} "
-               "(an octree needs the longest edge at most {} times the shortest)",
-               L[0], L[1], L[2], update->ntimestep, o.order, kifmm::max_cell_aspect);
+               "kspace_style kifmm: no single-level grid (cells at most {} times longer than wide) "
+               "fits the periodic box of lengths {:.10g} {:.10g} {:.10g} (step {}) within the grid "
+               "memory bound at order {} (an octree needs the longest edge at most {} times the shortest)",
+               kifmm::max_grid_cell_aspect, L[0], L[1], L[2], update->ntimestep, o.order, kifmm::max_cell_aspect);
 }
 
 // The box is the periodic cell, handed to the engine at every evaluation so that fix deform,
@@ -331,7 +332,7 @@ kifmm::Evaluator &KSpaceKIFMM::virial_evaluator()
   if (best == 0)
     error->all(FLERR,
                "kspace_style kifmm: the virial tensor of the periodic box of lengths {:.10g} {:.10g} "
-               "{:.10g} needs a single-level grid of nearly cubic cells and none fits at order {}; "
+               "{:.10g} needs a single-level grid and none fits at order {}; "
                "'kspace_modify pressure/scalar yes' gives the scalar pressure only",
                domain->xprd, domain->yprd, domain->zprd, o.order);
   kifmm::Options v = o;

@@ -430,8 +430,8 @@ TEST(Distributed, PeriodicGridEqualsSerial)
   for (std::size_t n : {5, 40}) check_all_partitions(neutral(uniform_cube(n, 35)), 0, 24, 1.0, 6, 3);
 }
 
-// Rectangular periodic cells: the octree in a nearly cubic one, the single-level grid of nearly
-// cubic cells in elongated ones (cells per axis in proportion to the edges)
+// Rectangular periodic cells: the octree in a nearly cubic one, the single-level grid in
+// elongated ones (cells per axis in proportion to the edges; nearly cubic or stretched)
 TEST(Distributed, PeriodicRectangularCellsEqualSerial)
 {
   auto in_box = [](Points p, const double shape[3]) {
@@ -446,6 +446,9 @@ TEST(Distributed, PeriodicRectangularCellsEqualSerial)
   Points nc = in_box(uniform_cube(2000, 40), slab);
   for (double &q : nc.q) q = std::fabs(q);    // net charge: background moments and wrap marginals
   check_all_partitions(nc, 0, 24, 1.0, 6, 10, slab);
+  // stretched cells (12 x 12 x 2 of 1 x 1 x 0.75): ghosts from 2 cells along z
+  const double flat[3] = {1.0, 1.0, 0.125};
+  check_all_partitions(in_box(neutral(uniform_cube(2000, 43)), flat), 0, 24, 1.0, 6, 12, flat);
 }
 
 // A slab (periodic in x and y, open in z): no ghosts across the z faces
@@ -461,6 +464,8 @@ TEST(Distributed, SlabEqualsSerial)
   Points nc = in_box(uniform_cube(1500, 42), tall);
   for (double &q : nc.q) q = std::fabs(q);    // net charge
   check_all_partitions(nc, 0, 24, 1.0, 6, 6, tall, 2);
+  const double flat[3] = {1.0, 1.0, 0.125};    // stretched cells, 12 x 12 x 2: 5 z layers
+  check_all_partitions(in_box(neutral(uniform_cube(1500, 44)), flat), 0, 24, 1.0, 6, 12, flat, 2);
 }
 
 TEST(Distributed, PeriodicFewPointsEqualSerial)

@@ -313,7 +313,68 @@ TEST(PeriodicBox, CubeShapeIsTheCube)
   }
 }
 
-TEST(PeriodicBox, TheChoiceTakesAGridOfNearlyCubicCells)
+TEST(PeriodicBox, GridOfStretchedCells)
+{
+  // cells longer than max_cell_aspect along some axis: cubic surfaces and a near field deeper
+  // along the short axes (grid_near_depth): flat cells (12 x 12 x 2 in a 1 x 1 x 0.125 box,
+  // 3 x 3 x 5 near cells), tall ones (10 x 10 x 1 there, 5 x 5 x 3), a needle (12 x 2 x 2) and
+  // one cell across a thin side met at shifts up to 2 (12 x 12 x 1 in 1 x 1 x 0.06); sources =
+  // targets (mutual near field) and separate targets (one-sided), Laplace and Yukawa, against
+  // the Ewald sum: errors within the bounds of cubic cells at the same order
+  struct Case {
+    double shape[3];
+    int k;
+    int cells[3];
+    int near[3];
+  };
+  const Case cases[] = {{{1.0, 1.0, 0.125}, 12, {12, 12, 2}, {1, 1, 2}},
+                        {{1.0, 1.0, 0.125}, 10, {10, 10, 1}, {2, 2, 1}},
+                        {{1.0, 0.125, 0.125}, 12, {12, 2, 2}, {1, 2, 2}},
+                        {{1.0, 1.0, 0.06}, 12, {12, 12, 1}, {1, 1, 2}}};
+  const double c[3] = {0.5, 0.0, -2.0};
+  for (const Case &cs : cases) {
+    int kd[3], m[3];
+    double shp[3], ss[3];
+    kifmm::grid_cells_per_axis(cs.k, cs.shape, kd);
+    kifmm::grid_cell_shape(kd, cs.shape, shp);
+    kifmm::grid_near_depth(shp, m, ss);
+    for (int d = 0; d < 3; ++d) {
+      ASSERT_EQ(kd[d], cs.cells[d]);
+      ASSERT_EQ(m[d], cs.near[d]);
+      ASSERT_EQ(ss[d], 1.0);
+    }
+    ASSERT_TRUE(kifmm::grid_fits_cell(8, cs.k, cs.shape)) << cs.k;
+    const Points p = neutral(box_points(800, 54, c, 2.0, cs.shape));
+    const Points t = box_points(100, 55, c, 2.0, cs.shape);
+    const std::size_t n = p.size(), nt = t.size();
+    for (const KernelSpec &ker : {KernelSpec{}, KernelSpec{KernelType::Yukawa, 2.0}}) {
+      // the Ewald references (at the sources themselves, and at the separate targets)
+      kifmm::Options o = box_options(6, 40, c, 2.0, cs.shape);
+      o.periodic_grid = cs.k;
+      std::vector<double> rp(n), rg(3 * n), rtp(nt), rtg(3 * nt);
+      kifmm::periodic_direct_sum(ker, o.root_center, o.root_half_width, n, p.xyz.data(), p.q.data(), n, p.xyz.data(),
+                                 rp.data(), rg.data(), o.root_shape);
+      kifmm::periodic_direct_sum(ker, o.root_center, o.root_half_width, n, p.xyz.data(), p.q.data(), nt, t.xyz.data(),
+                                 rtp.data(), rtg.data(), o.root_shape);
+      for (int order : {6, 8}) {
+        if (order == 8 && (ker.type == KernelType::Yukawa || &cs != &cases[0])) continue;    // (table cost)
+        o.order = order;
+        std::vector<double> pot(n), g(3 * n), tp(nt), tg(3 * nt);
+        kifmm::make_evaluator(ker, o)->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());
+        kifmm::make_evaluator(ker, o)->evaluate(n, p.xyz.data(), p.q.data(), nt, t.xyz.data(), tp.data(), tg.data());
+        const double e[4] = {rel_l2(pot, rp), rel_l2(g, rg), rel_l2(tp, rtp), rel_l2(tg, rtg)};
+        std::printf("  stretched grid %dx%dx%d (near %d %d %d) %s p=%d: mutual pot %.2e grad %.2e, one-sided pot "
+                    "%.2e grad %.2e\n",
+                    kd[0], kd[1], kd[2], m[0], m[1], m[2], ker.type == KernelType::Yukawa ? "yukawa" : "laplace",
+                    order, e[0], e[1], e[2], e[3]);
+        const double tol = order == 6 ? 2e-5 : 2e-6;    // as cubic cells (GridInRectangularBoxesUpToOneToEight)
+        for (double v : e) EXPECT_LT(v, tol);
+      }
+    }
+  }
+}
+
+TEST(PeriodicBox, TheChoiceTakesAGridWhoseCellsFit)
 {
   const double shape[3] = {1.0, 0.8, 0.6}, c[3] = {0, 0, 0};
   Points p = box_points(4000, 51, c, 1.0, shape);
@@ -337,7 +398,9 @@ TEST(PeriodicBox, TheChoiceTakesAGridOfNearlyCubicCells)
   // a nearly cubic cell keeps the octree among the candidates
   const double near[3] = {1.0, 0.99, 0.98};
   EXPECT_TRUE(kifmm::octree_fits_cell(near));
-  // no grid of nearly cubic cells within memory: none returned
-  const double awkward[3] = {1.0, 0.01, 0.013};
+  // no grid whose cells fit within memory (cells at most twice as long as wide along a side of
+  // 0.005 need 100 along x, 30 along y): none returned
+  const double awkward[3] = {1.0, 0.3, 0.005};
+  for (int k = 3; k <= 400; ++k) EXPECT_FALSE(kifmm::grid_fits_cell(10, k, awkward)) << k;
   EXPECT_EQ(kifmm::choose_tree(10, 1000, true, true, awkward).grid, 0);
 }

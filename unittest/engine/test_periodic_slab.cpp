@@ -144,9 +144,12 @@ TEST(PeriodicSlab, GridMatchesTheDoublyPeriodicSum)
     double shift;
   };
   // a flat slab, a tall one, a rectangular floor; neutral and with a net charge; columns of 2 x 2
-  // and 2 x 1 cells across (one neighbour met at two shifts, a cell's own images)
-  const Case cases[] = {{{1.0, 1.0, 0.5}, 6, 0.0},   {{0.5, 0.5, 1.0}, 6, 0.0},    {{1.0, 0.6, 0.4}, 5, 0.0},
-                        {{1.0, 1.0, 0.5}, 6, 0.3},   {{0.25, 0.25, 1.0}, 8, 0.0}, {{0.25, 0.125, 1.0}, 8, 0.0}};
+  // and 2 x 1 cells across (one neighbour met at two shifts, a cell's own images); stretched
+  // cells (12 x 12 x 2 of 1 x 1 x 0.75, 5 layers in the near field along the open z)
+  const Case cases[] = {{{1.0, 1.0, 0.5}, 6, 0.0},    {{0.5, 0.5, 1.0}, 6, 0.0},
+                        {{1.0, 0.6, 0.4}, 5, 0.0},    {{1.0, 1.0, 0.5}, 6, 0.3},
+                        {{0.25, 0.25, 1.0}, 8, 0.0},  {{0.25, 0.125, 1.0}, 8, 0.0},
+                        {{1.0, 1.0, 0.125}, 12, 0.0}, {{1.0, 1.0, 0.125}, 12, 0.3}};
   const double c[3] = {0.5, -1.0, 2.0};
   for (const Case &cs : cases) {
     Points p = slab_points(400, 63, c, 1.5, cs.shape, cs.shift);

@@ -520,7 +520,7 @@ TEST_F(Periodic, GravityWithoutJeansIsAnError)
 // ---------------------------------------------------------------- orthogonal boxes
 
 // rectangular boxes: a nearly cubic one (the octree, every cell of the box's shape) and boxes
-// of aspect ratio 1.3, 4 and 8 (the single-level grid of nearly cubic cells; 8: 1 and 2 cells
+// of aspect ratio 1.3, 4 and 8 (the single-level grid, cubic or stretched cells; 8: 1 and 2 cells
 // across the thin sides), equal to ewald
 TEST_F(Periodic, RectangularBoxesEqualEwald)
 {
@@ -567,10 +567,11 @@ TEST_F(Periodic, RectangularBoxMeetsTheRequestedAccuracy)
 TEST_F(Periodic, GridThatDoesNotFitTheBoxIsAnErrorListingGridsThatDo)
 {
   load(uniform_cube(50, 52));
-  commands("change_box all y final 0 1.25 units box\npair_style zero 0.1\npair_coeff * *\n"
+  commands("change_box all y final 0 0.12 units box\npair_style zero 0.1\npair_coeff * *\n"
            "kspace_style kifmm 1e-4\nkspace_modify kifmm grid 3");
-  EXPECT_LAMMPS_ERROR(command("run 0"), "grid 3: in the box of lengths 1 1.25 1 .*2 x 3 x 2 cells are not nearly "
-                                        "cubic.*grids that fit \\(cells along the longest edge\\): 5, ");
+  EXPECT_LAMMPS_ERROR(command("run 0"), "grid 3: in the box of lengths 1 0.12 1 .*3 x 1 x 3 cells are too long for "
+                                        "their width \\(longest edge 2.778 times the shortest, at most 2\\).*grids "
+                                        "that fit \\(cells along the longest edge\\): 5, ");
 }
 
 TEST_F(Periodic, OctreeInAnElongatedBoxIsAnError)

@@ -344,9 +344,19 @@ TreeCounts uniform_grid_counts(std::size_t n, int k, const double *shape, bool o
   int kd[3];
   grid_cells_per_axis(k, shape, kd);
   const double cells = (double) kd[0] * kd[1] * kd[2], m = (double) n / cells;
-  // a slab: the two z boundary layers have no neighbours across the open faces (on average
-  // 9 (3 - 2 / kz) neighbour cells)
-  const double neighbours = open_z ? 9 * (3.0 - 2.0 / kd[2]) : 27.0;
+  int near[3];
+  double cs[3], ss[3];
+  grid_cell_shape(kd, shape, cs);
+  grid_near_depth(cs, near, ss);
+  // a slab: the z boundary layers have no neighbours across the open faces (with the 26
+  // neighbours, on average 9 (3 - 2 / kz) neighbour cells)
+  double along_z = 2 * near[2] + 1;
+  if (open_z) {
+    along_z = 0;
+    for (int a = 0; a < kd[2]; ++a) along_z += std::min(kd[2] - 1, a + near[2]) - std::max(0, a - near[2]) + 1;
+    along_z /= kd[2];
+  }
+  const double neighbours = (2 * near[0] + 1) * (2 * near[1] + 1) * along_z;
   t.near_pairs = neighbours * cells * m * m / 2;
   t.self_pairs = cells * m * m / 2;
   t.entries = 14 * cells;
@@ -364,16 +374,21 @@ TreeCounts grid_counts(std::size_t n, const double *xyz, const double center[3],
   std::vector<double> occ(kc, 0.0);
   for (std::size_t i = 0; i < n; ++i) occ[grid_cell_index(xyz + 3 * i, center, half_width, shape, kd)] += 1;
   TreeCounts t;
+  int near[3];
+  double cs[3], ss[3];
+  grid_cell_shape(kd, shape, cs);
+  grid_near_depth(cs, near, ss);
+  const auto offsets = grid_near_offsets(near);
   t.cells = grid_modelled_cells(kd, open_z);    // a slab: the convolution zero-padded along z
   t.entries = 14.0 * kc;
   for (int b = 0; b < kc; ++b) {
     if (occ[b] == 0) continue;
     t.occupied_cells += 1;
-    for (int o = 0; o < 27; ++o) {
-      const int dz = o % 3 - 1, az = b % kd[2] + dz;
+    for (const auto &o : offsets) {
+      const int az = b % kd[2] + o[2];
       if (open_z && (az < 0 || az >= kd[2])) continue;    // no images along z
       signed char sh[3];
-      t.near_pairs += occ[b] * occ[grid_neighbour_cell(b, kd, o / 9 - 1, (o / 3) % 3 - 1, dz, sh)] / 2;
+      t.near_pairs += occ[b] * occ[grid_neighbour_cell(b, kd, o[0], o[1], o[2], sh)] / 2;
     }
     t.self_pairs += occ[b] * occ[b] / 2;
   }
@@ -441,7 +456,7 @@ bool grid_fits_cell(int order, int k, const double shape[3], bool open_z)
   int kd[3];
   grid_cells_per_axis(k, shape, kd);
   if (open_z && (double) kd[0] * kd[1] * 2 * kd[2] > grid_memory_cells(order)) return false;    // zero padding
-  return grid_cell_aspect(kd, shape) <= max_cell_aspect * (1 + 1e-12);
+  return grid_cell_aspect(kd, shape) <= max_grid_cell_aspect * (1 + 1e-12);
 }
 
 TreeChoice choose_slab_grid(int order, std::size_t n, const double shape[3])

@@ -325,6 +325,8 @@ template <class K> class FmmEvaluator : public Evaluator {
     int k[3] = {0, 0, 0}, kc = 0;                  // cells per axis, cells
     double H = 0, h = 0;                           // largest half-width of the periodic cell, of a grid cell
     double cs[3] = {1, 1, 1};                      // a grid cell's half-widths in units of h (largest 1)
+    double ss[3] = {1, 1, 1};                      // its surfaces' half-widths (grid_near_depth)
+    int m[3] = {1, 1, 1};                          // cells of the near field on each side, per axis
     double w[3] = {0, 0, 0}, L[3] = {0, 0, 0};     // grid cell widths, periods
     bool slab = false;                             // periodic_dims 2: open in z
   };

@@ -105,8 +105,9 @@ struct TableMirror {
   }
 };
 
-// Values of K_D (periodic_grid.h) in unit-grid coordinates (cell half-widths cs_d, largest 1)
-// at every r_d = (2 D_d + i dx) cs_d, D the class representative in (-k_d/2, k_d/2], i in
+// Values of K_D (periodic_grid.h) in unit-grid coordinates (cell half-widths cs_d, largest 1;
+// surfaces of half-widths ss_d and near depths m_d: grid_near_depth)
+// at every r_d = 2 D_d cs_d + i dx ss_d, D the class representative in (-k_d/2, k_d/2], i in
 // [-(p-1), p-1]: a tensor grid of k_d (2p - 1) coordinates along axis d. With K the largest
 // periodic half-width k_d cs_d, G_per(r) = G_per,unit(r / K) / K, by the Ewald split of the
 // unit cell of half-widths k_d cs_d / K: real-space terms (the excluded near images in regular
@@ -122,6 +123,9 @@ std::vector<double> grid_kernel_values(const KernelSpec &unit, const int k[3], i
   const int m = 2 * p - 1;
   const int nc[3] = {k[0] * m, k[1] * m, k[2] * m};
   const double dx = p > 1 ? 2.0 * kRadiusInner / (p - 1) : 0.0;
+  int near[3];
+  double ss[3];
+  grid_near_depth(cs, near, ss);
   std::vector<int> rep[3];     // class representative of each 1D coordinate
   std::vector<double> u[3];    // unit-cell coordinate (r / K)
   std::vector<double> zeta[3];    // its part within the cells: (check - centre) - (equivalent - centre)
@@ -133,8 +137,8 @@ std::vector<double> grid_kernel_values(const KernelSpec &unit, const int k[3], i
       for (int i = 0; i < m; ++i) {
         const int D = grid_class_representative(a, k[d]);
         rep[d][a * m + i] = D;
-        u[d][a * m + i] = (2.0 * D + (i - (p - 1)) * dx) * cs[d] / K;
-        zeta[d][a * m + i] = (i - (p - 1)) * dx * cs[d] / K;
+        u[d][a * m + i] = (2.0 * D * cs[d] + (i - (p - 1)) * dx * ss[d]) / K;
+        zeta[d][a * m + i] = (i - (p - 1)) * dx * ss[d] / K;
       }
   }
   // reciprocal sum Re sum_m W(k) e^{i k.u}, k_d = pi m_d / box_d
@@ -208,14 +212,14 @@ std::vector<double> grid_kernel_values(const KernelSpec &unit, const int k[3], i
         double pm[3] = {acc[1].imag(), acc[2].imag(), acc[3].imag()};    // P_a
         const double r[3] = {u[0][x], u[1][y], u[2][z]};
         const int D[3] = {rep[0][x], rep[1][y], rep[2][z]};
-        // images within the real-space cutoff per axis, and the excluded ones (|D + k n| <= 1:
-        // n = 0 when k >= 3; with 2 cells along an axis the class D = 1 has two (n = 0, -1), with
-        // 1 cell three (n = -1, 0, 1); images() is at least 1)
+        // images within the real-space cutoff per axis, and the excluded ones (the near field,
+        // |D + k n| <= m: with m = 1, n = 0 when k >= 3; with 2 cells along an axis the class
+        // D = 1 has two (n = 0, -1), with 1 cell three (n = -1, 0, 1))
         std::vector<int> cand[3];
         for (int c = 0; c < 3; ++c) {
-          const int Q = s.images(c, std::fabs(r[c]));
+          const int Q = std::max(s.images(c, std::fabs(r[c])), near[c] / k[c] + 1);
           for (int q = -Q; q <= Q; ++q)
-            if (std::abs(r[c] + s.period[c] * q) <= cut || std::abs(D[c] + k[c] * q) <= 1) cand[c].push_back(q);
+            if (std::abs(r[c] + s.period[c] * q) <= cut || std::abs(D[c] + k[c] * q) <= near[c]) cand[c].push_back(q);
         }
         for (int n0 : cand[0])
           for (int n1 : cand[1])
@@ -224,7 +228,7 @@ std::vector<double> grid_kernel_values(const KernelSpec &unit, const int k[3], i
               bool excluded = true;    // the image is adjacent to the target cell
               double d2 = 0;
               for (int c = 0; c < 3; ++c) {
-                excluded = excluded && std::abs(D[c] + k[c] * n[c]) <= 1;
+                excluded = excluded && std::abs(D[c] + k[c] * n[c]) <= near[c];
                 const double d = r[c] + s.period[c] * n[c];
                 d2 += d * d;
               }
@@ -268,9 +272,10 @@ std::vector<double> grid_kernel_values(const KernelSpec &unit, const int k[3], i
 }
 
 // Slab (periodic in x and y, open in z): K_D at x, y as above (classes mod k_d), at z on
-// (2 D_z + i dx) cs_z for D_z in [-(k_z - 1), k_z - 1] (no images in z), G_2 the doubly periodic
-// sum of slab_ewald.h for the unit cell of half-widths k_d cs_d / K in x and y (K the larger),
-// excluding the images adjacent to the target cell (|D_x + k_x n_x|, |D_y + k_y n_y|, |D_z| <= 1).
+// 2 D_z cs_z + i dx ss_z for D_z in [-(k_z - 1), k_z - 1] (no images in z), G_2 the doubly
+// periodic sum of slab_ewald.h for the unit cell of half-widths k_d cs_d / K in x and y (K the
+// larger), excluding the images in the target cell's near field (|D_x + k_x n_x| <= m_x,
+// |D_y + k_y n_y| <= m_y, |D_z| <= m_z).
 // No quadratic part (G_2 is harmonic). v[(x * nc1 + y) * nc2 + z], nc2 = (2 k_z - 1)(2p - 1).
 // With moment: the offset-weighted kernels of the virial as in grid_kernel_values, from
 // P_a(r) = sum_n (r + n L)_a G(r + n L) over the x-y lattice: real space (r_n)_a erfc(alpha r_n) /
@@ -287,6 +292,9 @@ std::vector<double> slab_kernel_values(const int k[3], int p, const double cs[3]
   const int m = 2 * p - 1;
   const int nc[3] = {k[0] * m, k[1] * m, (2 * k[2] - 1) * m};
   const double dx = p > 1 ? 2.0 * kRadiusInner / (p - 1) : 0.0;
+  int near[3];
+  double ss[3];
+  grid_near_depth(cs, near, ss);
   std::vector<int> rep[3];
   std::vector<double> u[3], zeta[3];
   for (int d = 0; d < 3; ++d) {
@@ -298,8 +306,8 @@ std::vector<double> slab_kernel_values(const int k[3], int p, const double cs[3]
       for (int i = 0; i < m; ++i) {
         const int D = d < 2 ? grid_class_representative(a, k[d]) : a - (k[2] - 1);
         rep[d][a * m + i] = D;
-        u[d][a * m + i] = (2.0 * D + (i - (p - 1)) * dx) * cs[d] / K;
-        zeta[d][a * m + i] = (i - (p - 1)) * dx * cs[d] / K;
+        u[d][a * m + i] = (2.0 * D * cs[d] + (i - (p - 1)) * dx * ss[d]) / K;
+        zeta[d][a * m + i] = (i - (p - 1)) * dx * ss[d] / K;
       }
   }
   // reciprocal sum over the whole plane of m: Re sum w(|k|, z) e^{i k.rho}
@@ -364,13 +372,14 @@ std::vector<double> slab_kernel_values(const int k[3], int p, const double cs[3]
         double pm[2] = {-acc[1].imag(), -acc[2].imag()};    // P_x, P_y
         std::vector<int> cand[2];
         for (int c = 0; c < 2; ++c) {
-          const int Q = s.images(c, std::fabs(r[c]));
+          const int Q = std::max(s.images(c, std::fabs(r[c])), near[c] / k[c] + 1);
           for (int q = -Q; q <= Q; ++q)
-            if (std::abs(r[c] + s.period[c] * q) <= cut || std::abs(D[c] + k[c] * q) <= 1) cand[c].push_back(q);
+            if (std::abs(r[c] + s.period[c] * q) <= cut || std::abs(D[c] + k[c] * q) <= near[c]) cand[c].push_back(q);
         }
         for (int n0 : cand[0])
           for (int n1 : cand[1]) {
-            const bool excluded = std::abs(D[0] + k[0] * n0) <= 1 && std::abs(D[1] + k[1] * n1) <= 1 && std::abs(D[2]) <= 1;
+            const bool excluded = std::abs(D[0] + k[0] * n0) <= near[0] && std::abs(D[1] + k[1] * n1) <= near[1] &&
+                std::abs(D[2]) <= near[2];
             const double d0 = r[0] + s.period[0] * n0, d1 = r[1] + s.period[1] * n1;
             const double rho = std::sqrt(d0 * d0 + d1 * d1 + r[2] * r[2]);
             if (excluded && rho == 0.0) {

@@ -1,18 +1,20 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Periodic (p p p) evaluation on ONE level of k^3 cubic cells (k >= 3 per side), or in a
-// rectangular periodic cell kx x ky x kz nearly cubic cells (grid_cells_per_axis), the cheaper
-// choice for small N (about 1e3 .. 3e4 atoms, see cost_model.h): the octree's 4 or 8 leaves
-// per side leave either too many atoms per leaf (near field) or too many M2L translations;
-// 5, 6, 7 ... per side fill the gap. Laplace and Yukawa.
-//   near field : every cell with itself and its 26 neighbours (images included: with 1 or 2
-//                cells along an axis, its own images or one cell met at two shifts), pair by
-//                pair for both sides when sources = targets;
+// rectangular periodic cell kx x ky x kz cells (grid_cells_per_axis), the cheaper choice for
+// small N (about 1e3 .. 3e4 atoms, see cost_model.h): the octree's 4 or 8 leaves per side leave
+// either too many atoms per leaf (near field) or too many M2L translations; 5, 6, 7 ... per
+// side fill the gap. Laplace and Yukawa.
+//   near field : every cell with itself and the cells within m_d along each axis d
+//                (grid_near_depth: m = 1 1 1, the 26 neighbours, for nearly cubic cells; deeper
+//                along the short axes of stretched cells), images included (with few cells
+//                along an axis, its own images or one cell met at several shifts), pair by pair
+//                for both sides when sources = targets;
 //   far field  : ALL other images of all cells through one convolution. For a target cell t
-//                and a source cell s, every image s + k n that is not adjacent to t
-//                (|s + k n - t|_inf >= 2) acts through the ordinary M2L (its equivalent
-//                surface is well separated from t's check surface), and these images are
-//                summed into one kernel per offset class D = t - s mod k:
-//                  K_D(r) = G_per(r) - sum_{n: |D + k n|_inf <= 1} G(r + 2k n h) - quad |r|^2
+//                and a source cell s, every image s + k n outside t's near field
+//                (|s_d + k_d n_d - t_d| > m_d along some axis d) acts through the ordinary M2L
+//                (its equivalent surface is well separated from t's check surface), and these
+//                images are summed into one kernel per offset class D = t - s mod k:
+//                  K_D(r) = G_per(r) - sum_{n: |D_d + k_d n_d| <= m_d} G(r + 2k n h) - quad |r|^2
 //                sampled on the M2L lattice (G_per: the Ewald sum of the cell, Laplace tin-foil
 //                with the background, quad |r|^2 its non-harmonic part, added exactly at the
 //                targets from the moments as in the octree path; Yukawa: the screened lattice
@@ -28,6 +30,7 @@
 #include "m2l_fft.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <complex>
 #include <cstddef>
@@ -101,17 +104,29 @@ inline int grid_class_representative(int a, int k)
   return 2 * r <= k ? r : r - k;
 }
 
-// The cell at offset (dx, dy, dz) in {-1,0,1}^3 of cell b, periodically; sh: the root shift of
-// that image (-1, 0 or 1 per axis).
+// The cell at offset (dx, dy, dz) of cell b, periodically; sh: the root shift of that image
+// (floor of the offset cell's index over the cells along the axis: -1, 0 or 1 for offsets
+// within one period).
 inline int grid_neighbour_cell(int b, const int cells[3], int dx, int dy, int dz, signed char sh[3])
 {
   const int a[3] = {b / (cells[1] * cells[2]) + dx, (b / cells[2]) % cells[1] + dy, b % cells[2] + dz};
   int w[3];
   for (int d = 0; d < 3; ++d) {
-    sh[d] = (signed char) (a[d] < 0 ? -1 : a[d] >= cells[d] ? 1 : 0);
-    w[d] = a[d] - sh[d] * cells[d];
+    const int q = a[d] >= 0 ? a[d] / cells[d] : -((cells[d] - 1 - a[d]) / cells[d]);
+    sh[d] = (signed char) q;
+    w[d] = a[d] - q * cells[d];
   }
   return (w[0] * cells[1] + w[1]) * cells[2] + w[2];
+}
+// The near field's cell offsets (dx, dy, dz), |d_a| <= m_a (grid_near_depth), in lexicographic
+// order: offset i and offset size - 1 - i are opposite, the middle one is 0 0 0.
+inline std::vector<std::array<int, 3>> grid_near_offsets(const int m[3])
+{
+  std::vector<std::array<int, 3>> o;
+  for (int x = -m[0]; x <= m[0]; ++x)
+    for (int y = -m[1]; y <= m[1]; ++y)
+      for (int z = -m[2]; z <= m[2]; ++z) o.push_back({x, y, z});
+  return o;
 }
 inline int grid_neighbour_cell(int b, int k, int dx, int dy, int dz, signed char sh[3])
 {

@@ -3,8 +3,8 @@
 // the end of fmm_core.h; the method is described in periodic_grid.h). Points are already
 // wrapped into the cell (the fixed root). Passes: bin -> P2M -> surface FFTs -> convolution
 // over the cells (all far images) -> inverse FFTs -> check-to-equivalent -> L2P; near field
-// (each cell with itself and its 26 neighbours, mutual when sources = targets); Laplace
-// background term.
+// (each cell with itself and its neighbours, grid_near_depth; mutual when sources = targets);
+// Laplace background term.
 #pragma once
 
 #include "fmm_core.h"
@@ -34,7 +34,7 @@ void FmmEvaluator<K>::evaluate_grid(std::size_t ns, const double *sxyz, const do
 }
 
 // Distributed (evaluate_distributed with Options::periodic_grid): every rank bins its own
-// points; the near field needs the sources of the 26 neighbour cells of every cell holding
+// points; the near field needs the sources of the neighbour cells of every cell holding
 // own targets: the ranks' target cells are all-gathered (cell indices) and each rank sends the
 // others its sources in the cells next to theirs (ghosts, one alltoallv). The cells' upward
 // densities are the sum of every rank's own-source part (one allreduce of k^3 surfaces), the
@@ -76,13 +76,14 @@ void FmmEvaluator<K>::evaluate_grid_distributed(Communicator &comm, const LocalP
     const int nr = comm.size(), me = comm.rank();
     std::vector<std::vector<double>> send(nr), recv;
     std::vector<char> near(kc);
+    const auto offsets = grid_near_offsets(g.m);
     for (int r = 0, at = 0; r < nr; at += counts[r], ++r) {
       if (r == me) continue;
       std::fill(near.begin(), near.end(), 0);
       for (int e = at; e < at + counts[r]; ++e)
-        for (int o = 0; o < 27; ++o) {
+        for (const auto &o : offsets) {
           signed char sh[3];
-          const int a = grid_neighbour(all_cells[e], o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, sh);
+          const int a = grid_neighbour(all_cells[e], o[0], o[1], o[2], sh);
           if (a >= 0) near[a] = 1;
         }
       for (std::size_t j = 0; j < own; ++j)
@@ -183,6 +184,7 @@ template <class K> typename FmmEvaluator<K>::GridGeometry FmmEvaluator<K>::grid_
   g.kc = g.k[0] * g.k[1] * g.k[2];
   g.H = opt_.root_half_width;
   g.h = g.H * grid_cell_shape(g.k, opt_.root_shape, g.cs);
+  grid_near_depth(g.cs, g.m, g.ss);
   for (int d = 0; d < 3; ++d) {
     g.L[d] = 2.0 * g.H * opt_.root_shape[d];
     g.w[d] = g.L[d] / g.k[d];
@@ -269,11 +271,12 @@ void FmmEvaluator<K>::grid_passes(Communicator *comm, std::size_t own_sources, b
 template <class K> void FmmEvaluator<K>::grid_operators(const GridGeometry &g)
 {
   double t_setup = 0, s = 1.0;
-  // cells of the grid's shape (rectangular periodic cells: nearly cubic ones, in memory only)
-  const UnitKernel uk = make_unit_kernel(k_, g.h, s, g.cs);
+  // surfaces of the grid's shape (nearly cubic cells: the cell's, in memory only; cubes and
+  // stretched cells: cubic)
+  const UnitKernel uk = make_unit_kernel(k_, g.h, s, g.ss);
   ops_.assign(1, get_operator_set(uk, p_, uk.cubic() ? opt_.cache_dir : std::string(), &t_setup));
   RootBox cell;
-  for (int d = 0; d < 3; ++d) cell.shape[d] = g.cs[d];
+  for (int d = 0; d < 3; ++d) cell.shape[d] = g.ss[d];
   shape_surfaces(cell);
   scale_.assign(1, s);
   if (!fft_ || fft_->p() != p_) fft_ = std::make_unique<M2LTransform>(p_);
@@ -387,29 +390,32 @@ template <class K> void FmmEvaluator<K>::grid_l2p(const GridGeometry &g, bool wa
   }
 }
 
-// Near field, sources = targets: each cell with itself and its 26 neighbours (images: shift in
-// {-1,0,1}^3), pair by pair for both cells (13 of the 26 offsets). With 2 cells along an axis
-// one neighbour cell is met at two shifts (two pairs); with 1 cell along an axis the cell's
-// neighbours include its own images: those go with the cell's self task, one-sided at +shift
-// and -shift (the pair evaluation would write both sides of one cell at once). Returns the
-// coincident pairs.
+// Near field, sources = targets: each cell with itself and its neighbours (offsets within
+// g.m per axis, images included), pair by pair for both cells (the second half of the offsets,
+// grid_near_offsets). With few cells along an axis one neighbour cell is met at several shifts
+// (one pair each); with offsets a multiple of the cells along every axis, the cell's neighbours
+// include its own images: those go with the cell's self task, one-sided at +shift and -shift
+// (the pair evaluation would write both sides of one cell at once). Returns the coincident
+// pairs.
 template <class K> std::size_t FmmEvaluator<K>::grid_near_mutual(const GridGeometry &g, bool want_pot)
 {
   const std::vector<int> &sb = grid_src_begin_;
   std::vector<int> self;
   std::vector<MutualPair> pairs;
+  const auto all = grid_near_offsets(g.m);
+  const std::vector<std::array<int, 3>> half(all.begin() + all.size() / 2 + 1, all.end());
   std::vector<std::array<signed char, 3>> self_images;    // the same for every cell: those of cell 0
-  for (int o = 14; o < 27; ++o) {
+  for (const auto &o : half) {
     signed char sh[3];
-    if (grid_neighbour(0, o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, sh) == 0) self_images.push_back({sh[0], sh[1], sh[2]});
+    if (grid_neighbour(0, o[0], o[1], o[2], sh) == 0) self_images.push_back({sh[0], sh[1], sh[2]});
   }
   for (int b = 0; b < g.kc; ++b) {
     if (sb[b + 1] == sb[b]) continue;
     self.push_back(b);
-    for (int o = 14; o < 27; ++o) {
+    for (const auto &o : half) {
       MutualPair pr;
       pr.a = b;
-      pr.b = grid_neighbour(b, o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, pr.shift);
+      pr.b = grid_neighbour(b, o[0], o[1], o[2], pr.shift);
       if (pr.b >= 0 && pr.b != b && sb[pr.b + 1] > sb[pr.b]) pairs.push_back(pr);
     }
   }
@@ -442,6 +448,7 @@ template <class K> std::size_t FmmEvaluator<K>::grid_near_one_sided(const GridGe
 {
   const std::vector<int> &sb = grid_src_begin_, &tb = grid_trg_begin_;
   std::vector<std::size_t> zc(g.kc, 0);
+  const auto offsets = grid_near_offsets(g.m);
 #pragma omp parallel
   {
     std::vector<double> x, y, zz;
@@ -449,9 +456,9 @@ template <class K> std::size_t FmmEvaluator<K>::grid_near_one_sided(const GridGe
     for (int b = 0; b < g.kc; ++b) {
       const std::size_t t = tb[b], n = tb[b + 1] - tb[b];
       if (n == 0) continue;
-      for (int o = 0; o < 27; ++o) {
+      for (const auto &o : offsets) {
         signed char sh[3];
-        const int a = grid_neighbour(b, o / 9 - 1, (o / 3) % 3 - 1, o % 3 - 1, sh);
+        const int a = grid_neighbour(b, o[0], o[1], o[2], sh);
         if (a < 0) continue;
         grid_shifted_targets(g, t, n, sh, x, y, zz);
         p2p_pg<K, true>(k_, want_pot, {n, x.data(), y.data(), zz.data()}, source_range(sb[a], sb[a + 1] - sb[a]),

@@ -125,6 +125,7 @@ template <class K> void FmmEvaluator<K>::grid_offset_field(Communicator *comm, d
       }
     }
     // ---- near part: the gradient of each neighbour cell's sources times the centres' offset
+    const auto offsets = grid_near_offsets(g.m);
 #pragma omp parallel
     {
       std::vector<double> x, y, z, gx, gy, gz, h[6];
@@ -132,8 +133,8 @@ template <class K> void FmmEvaluator<K>::grid_offset_field(Communicator *comm, d
       for (int b = 0; b < kc; ++b) {
         const std::size_t t = tb[b], m = tb[b + 1] - tb[b];
         if (m == 0) continue;
-        for (int o = 0; o < 27; ++o) {
-          const int dx = o / 9 - 1, dy = (o / 3) % 3 - 1, dz = o % 3 - 1;
+        for (const auto &o : offsets) {
+          const int dx = o[0], dy = o[1], dz = o[2];
           if (dx == 0 && dy == 0 && dz == 0) continue;    // D = 0
           signed char sh[3];
           const int s = grid_neighbour(b, dx, dy, dz, sh);

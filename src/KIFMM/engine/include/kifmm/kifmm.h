@@ -216,11 +216,13 @@ TreeChoice choose_tree(int order, std::size_t n, bool periodic, bool grid = fals
 // Periodic cells that are not cubes (Options::root_shape, the half-widths per axis in units of
 // the largest): every cell of the octree has the periodic cell's shape, and the single-level
 // grid has cells per axis in proportion to the edges (grid_cells_per_axis below).
-// Both are accurate for nearly cubic cells (at the same order, errors 1.5-3.5x those of cubes
-// when the longest edge is 1.05 times the shortest, 6-60x at 1.1): the octree fits periodic
-// cells within max_cell_aspect, other boxes take a grid whose cells are (grid_fits_cell: also
-// within the grid's memory bound at this order).
+// Cells whose surfaces take the cell's shape are accurate when nearly cubic (at the same order,
+// errors 1.5-3.5x those of cubes when the longest edge is 1.05 times the shortest, 6-60x at
+// 1.1): the octree fits periodic cells within max_cell_aspect. The grid's cells may be longer,
+// up to max_grid_cell_aspect (grid_near_depth: cubic surfaces and a deeper near field along the
+// short axes); grid_fits_cell also bounds the grid's memory at this order.
 constexpr double max_cell_aspect = 1.05;
+constexpr double max_grid_cell_aspect = 2.0;
 bool octree_fits_cell(const double shape[3]);
 bool grid_fits_cell(int order, int k, const double shape[3], bool open_z = false);
 // A slab (Options::periodic_dims = 2, open_z cells per axis): the grid of least modelled cost
@@ -251,12 +253,33 @@ inline double grid_cell_shape(const int cells[3], const double *shape, double ce
   return m;
 }
 // Longest over shortest cell edge (1: cubic cells). The choice offers grids whose cells are
-// within max_cell_aspect.
+// within max_grid_cell_aspect.
 inline double grid_cell_aspect(const int cells[3], const double *shape)
 {
   double cs[3];
   grid_cell_shape(cells, shape, cs);
   return 1.0 / std::min(cs[0], std::min(cs[1], cs[2]));
+}
+// The near field of a grid's cells of half-widths cs (grid_cell_shape, largest 1), per axis:
+// the cells it reaches on each side (m) and the shape of the cells' surfaces (ss, largest 1).
+// Cells within max_cell_aspect: their 26 neighbours (m = 1 1 1), surfaces of the cell's shape.
+// Longer ("stretched") cells keep cubic surfaces of their largest half-width, which enclose the
+// cell, and along each axis d reach the fewest cells m_d that keep the nearest far cell's centre
+// as far as between cubes, 4 largest half-widths: 2 (m_d + 1) cs_d >= 4. The far cells' upward
+// equivalent surfaces then stay outside the downward equivalent surface of the target, as in a
+// cubic grid (e.g. cells 1 x 1 x 0.75: 3 x 3 x 5 near cells).
+inline void grid_near_depth(const double cs[3], int m[3], double ss[3])
+{
+  const bool stretched = 1.0 / std::min(cs[0], std::min(cs[1], cs[2])) > max_cell_aspect * (1 + 1e-12);
+  for (int d = 0; d < 3; ++d) {
+    m[d] = stretched ? std::max(1, (int) std::ceil(2.0 / cs[d] - 1.0 - 1e-9)) : 1;
+    ss[d] = stretched ? 1.0 : cs[d];
+  }
+}
+// Cells in the near field of one cell (grid_near_depth's m): (2 m_x + 1)(2 m_y + 1)(2 m_z + 1).
+inline int grid_near_cells(const int m[3])
+{
+  return (2 * m[0] + 1) * (2 * m[1] + 1) * (2 * m[2] + 1);
 }
 
 

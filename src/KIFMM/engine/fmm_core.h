@@ -829,7 +829,7 @@ std::size_t FmmEvaluator<K>::mutual_near(bool want_pot, const std::vector<Mutual
     return z;
   };
   (void) color_off;    // the pairs are stored by color; run_mutual_tasks keeps that order per leaf
-  return run_mutual_tasks(cells.size(), self, pairs, [&](int a, int b, const signed char *s, bool self_pair) {
+  return run_mutual_tasks(cells.size(), self, pairs, [&](int a, int b, const signed char *s, bool self_pair, int) {
     const double sh[3] = {L ? s[0] * L[0] : 0.0, L ? s[1] * L[1] : 0.0, L ? s[2] * L[2] : 0.0};
     return run(a, b, sh, self_pair);
   });

@@ -13,8 +13,9 @@
 
 namespace kifmm {
 
-// run(a, b, shift, self_pair) evaluates one pair (shift: the root shift of b, in {-1,0,1}^3)
-// and returns its coincident pairs; the sum is returned.
+// run(a, b, shift, self_pair, index) evaluates one pair (shift: the root shift of b; index: of
+// the pair in `pairs`, or of the node in `self`) and returns its coincident pairs; the sum is
+// returned.
 template <class Run>
 std::size_t run_mutual_tasks(std::size_t nnodes, const std::vector<int> &self, const std::vector<MutualPair> &pairs,
                              Run run)
@@ -36,12 +37,12 @@ std::size_t run_mutual_tasks(std::size_t nnodes, const std::vector<int> &self, c
   {
     for (int i = 0; i < ns; ++i) {
 #pragma omp task depend(inout : d[self[i]]) firstprivate(i)
-      zp[i] = run(self[i], self[i], no_shift, true);
+      zp[i] = run(self[i], self[i], no_shift, true, i);
     }
     for (int e = 0; e < np; ++e) {
       const int a = pairs[e].a, b = pairs[e].b;
 #pragma omp task depend(inout : d[a], d[b]) firstprivate(e)
-      zp[ns + e] = run(pairs[e].a, pairs[e].b, pairs[e].shift, false);
+      zp[ns + e] = run(pairs[e].a, pairs[e].b, pairs[e].shift, false, e);
     }
 #pragma omp taskwait
   }

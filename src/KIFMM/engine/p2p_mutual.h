@@ -77,12 +77,13 @@ inline void mutual_step(const __m512d *xi, const __m512d *yi, const __m512d *zi,
   _mm512_store_pd(bgz, gbz);
 }
 
-// Cross pairs of two different leaves (not `self`, see p2p_mutual).
+// Cross pairs of two different leaves (not `self`, see p2p_mutual), B at nsh displacements
+// sh[3 s .. 3 s + 2] (the same cell met at several image shifts: one pass over all its copies).
 template <bool POT>
-inline void p2p_mutual_laplace_avx512(const MutualSpan &A, const MutualSpan &B, const double sh[3],
+inline void p2p_mutual_laplace_avx512(const MutualSpan &A, const MutualSpan &B, const double *sh, int nsh,
                                       std::size_t *n_zero)
 {
-  const std::size_t na = A.pts.n, nb = B.pts.n;
+  const std::size_t na = A.pts.n, nb1 = B.pts.n, nb = nb1 * nsh;
   const double *ax = A.pts.x, *ay = A.pts.y, *az = A.pts.z, *aq = A.pts.q;
   double *ap = A.acc.pot, *agx = A.acc.gx, *agy = A.acc.gy, *agz = A.acc.gz;
   const double *bx = B.pts.x, *by = B.pts.y, *bz = B.pts.z, *bq = B.pts.q;
@@ -97,10 +98,11 @@ inline void p2p_mutual_laplace_avx512(const MutualSpan &A, const MutualSpan &B, 
          *cgy = cgx + nbp, *cgz = cgy + nbp;
   for (std::size_t j = 0; j < nbp; ++j) {
     const bool in = j < nb;
-    cx[j] = in ? bx[j] + sh[0] : 1e100;    // padding: far away, q = 0
-    cy[j] = in ? by[j] + sh[1] : 1e100;
-    cz[j] = in ? bz[j] + sh[2] : 1e100;
-    cq[j] = in ? bq[j] : 0.0;
+    const std::size_t s = in ? j / nb1 : 0, jb = in ? j - s * nb1 : 0;
+    cx[j] = in ? bx[jb] + sh[3 * s] : 1e100;    // padding: far away, q = 0
+    cy[j] = in ? by[jb] + sh[3 * s + 1] : 1e100;
+    cz[j] = in ? bz[jb] + sh[3 * s + 2] : 1e100;
+    cq[j] = in ? bq[jb] : 0.0;
     cp[j] = cgx[j] = cgy[j] = cgz[j] = 0.0;
   }
   const __m512d zero = _mm512_setzero_pd();
@@ -135,10 +137,11 @@ inline void p2p_mutual_laplace_avx512(const MutualSpan &A, const MutualSpan &B, 
     agz[i] += _mm512_reduce_add_pd(acz[0]);
   }
   for (std::size_t j = 0; j < nb; ++j) {
-    if constexpr (POT) bp[j] += cp[j];
-    bgx[j] += cgx[j];
-    bgy[j] += cgy[j];
-    bgz[j] += cgz[j];
+    const std::size_t jb = j % nb1;
+    if constexpr (POT) bp[jb] += cp[j];
+    bgx[jb] += cgx[j];
+    bgy[jb] += cgy[j];
+    bgz[jb] += cgz[j];
   }
   if (n_zero) *n_zero += 2 * zeros;
 }
@@ -158,7 +161,7 @@ inline void p2p_mutual(const K &k, bool self, const MutualSpan &A, const MutualS
       p2p<K, POT, true, true>(k, A.pts, B.pts, A.acc, n_zero);
       return;
     }
-    p2p_mutual_laplace_avx512<POT>(A, B, sh, n_zero);
+    p2p_mutual_laplace_avx512<POT>(A, B, sh, 1, n_zero);
     return;
   }
 #endif
@@ -205,6 +208,24 @@ inline void p2p_mutual(const K &k, bool self, const MutualSpan &A, const MutualS
     zeros += (std::size_t) nz;
   }
   if (n_zero) *n_zero += 2 * zeros + (self ? na : 0);
+}
+
+// Two different leaves, B at nsh displacements sh[3 s .. 3 s + 2] (one cell met at several image
+// shifts of a thin periodic side): as nsh calls of p2p_mutual, in one pass where the kernel
+// allows it.
+template <class K, bool POT>
+inline void p2p_mutual_shifts(const K &k, const MutualSpan &A, const MutualSpan &B, const double *sh, int nsh,
+                              std::size_t *n_zero)
+{
+#if defined(__AVX512F__)
+  if constexpr (std::is_same_v<K, LaplaceKernel>) {
+    if (!A.pts.mx && !A.acc.hxx) {
+      p2p_mutual_laplace_avx512<POT>(A, B, sh, nsh, n_zero);
+      return;
+    }
+  }
+#endif
+  for (int s = 0; s < nsh; ++s) p2p_mutual<K, POT>(k, false, A, B, sh + 3 * s, n_zero);
 }
 
 }    // namespace kifmm

@@ -390,77 +390,89 @@ template <class K> void FmmEvaluator<K>::grid_l2p(const GridGeometry &g, bool wa
   }
 }
 
-// Near field, sources = targets: each cell with itself and its neighbours (offsets within
-// g.m per axis, images included), pair by pair for both cells (the second half of the offsets,
-// grid_near_offsets). With few cells along an axis one neighbour cell is met at several shifts
-// (one pair, all its shifts in one pass); with offsets a multiple of the cells along every axis, the cell's neighbours
-// include its own images: those go with the cell's self task, one-sided at +shift and -shift
-// (the pair evaluation would write both sides of one cell at once). Returns the coincident
-// pairs.
-template <class K> std::size_t FmmEvaluator<K>::grid_near_mutual(const GridGeometry &g, bool want_pot)
-{
-  const std::vector<int> &sb = grid_src_begin_;
+// The work of the mutual near field (grid_near_mutual): the nonempty cells (self tasks); per
+// cell, its nonempty neighbours at the second half of the offsets (grid_near_offsets), one
+// pair per neighbour cell with the displacements of every shift it is met at (d[3 s .. 3 s + 2]
+// for s in [first[e], first[e + 1]) of pair e); the cell's own images among those offsets (the
+// same for every cell). neighbour(b, dx, dy, dz, sh): FmmEvaluator::grid_neighbour.
+struct GridMutualPlan {
   std::vector<int> self;
   std::vector<MutualPair> pairs;
-  const auto all = grid_near_offsets(g.m);
-  const std::vector<std::array<int, 3>> half(all.begin() + all.size() / 2 + 1, all.end());
-  std::vector<std::array<signed char, 3>> self_images;    // the same for every cell: those of cell 0
-  for (const auto &o : half) {
-    signed char sh[3];
-    if (grid_neighbour(0, o[0], o[1], o[2], sh) == 0) self_images.push_back({sh[0], sh[1], sh[2]});
-  }
-  // per pair, the displacements of all its shifts: d[3 s .. 3 s + 2] for s in [first[e], first[e + 1])
   std::vector<int> first{0};
   std::vector<double> d;
+  std::vector<std::array<signed char, 3>> self_images;
+};
+template <class Neighbour>
+GridMutualPlan grid_mutual_plan(int kc, const std::vector<int> &sb, const int m[3], const double L[3], Neighbour neighbour)
+{
+  GridMutualPlan plan;
+  const auto all = grid_near_offsets(m);
+  const std::vector<std::array<int, 3>> half(all.begin() + all.size() / 2 + 1, all.end());
+  for (const auto &o : half) {
+    signed char sh[3];
+    if (neighbour(0, o[0], o[1], o[2], sh) == 0) plan.self_images.push_back({sh[0], sh[1], sh[2]});
+  }
   std::vector<MutualPair> met;    // one cell's neighbours at their shifts
-  for (int b = 0; b < g.kc; ++b) {
+  for (int b = 0; b < kc; ++b) {
     if (sb[b + 1] == sb[b]) continue;
-    self.push_back(b);
+    plan.self.push_back(b);
     met.clear();
     for (const auto &o : half) {
       MutualPair pr;
       pr.a = b;
-      pr.b = grid_neighbour(b, o[0], o[1], o[2], pr.shift);
+      pr.b = neighbour(b, o[0], o[1], o[2], pr.shift);
       if (pr.b >= 0 && pr.b != b && sb[pr.b + 1] > sb[pr.b]) met.push_back(pr);
     }
     for (std::size_t i = 0; i < met.size(); ++i) {
       bool seen = false;
       for (std::size_t j = 0; j < i && !seen; ++j) seen = met[j].b == met[i].b;
       if (seen) continue;
-      pairs.push_back(met[i]);
+      plan.pairs.push_back(met[i]);
       for (std::size_t j = i; j < met.size(); ++j)
         if (met[j].b == met[i].b)
-          for (int c = 0; c < 3; ++c) d.push_back(met[j].shift[c] * g.L[c]);
-      first.push_back((int) (d.size() / 3));
+          for (int c = 0; c < 3; ++c) plan.d.push_back(met[j].shift[c] * L[c]);
+      plan.first.push_back((int) (plan.d.size() / 3));
     }
   }
-  stats_.mutual_pairs = pairs.size();
-  return run_mutual_tasks(g.kc, self, pairs, [&](int a, int b, const signed char *sh, bool self_pair, int e) {
+  return plan;
+}
+
+// Near field, sources = targets: each cell with itself and its neighbours (offsets within
+// g.m per axis, images included), pair by pair for both cells (grid_mutual_plan). With few
+// cells along an axis one neighbour cell is met at several shifts (one pair, all its shifts in
+// one pass); with offsets a multiple of the cells along every axis, the cell's neighbours
+// include its own images: those go with the cell's self task, one-sided at +shift and -shift
+// (the pair evaluation would write both sides of one cell at once). Returns the coincident
+// pairs.
+template <class K> std::size_t FmmEvaluator<K>::grid_near_mutual(const GridGeometry &g, bool want_pot)
+{
+  const std::vector<int> &sb = grid_src_begin_;
+  const GridMutualPlan plan = grid_mutual_plan(
+      g.kc, sb, g.m, g.L, [&](int b, int dx, int dy, int dz, signed char *sh) { return grid_neighbour(b, dx, dy, dz, sh); });
+  stats_.mutual_pairs = plan.pairs.size();
+  return run_mutual_tasks(g.kc, plan.self, plan.pairs, [&](int a, int b, const signed char *, bool self_pair, int e) {
     const MutualSpan sa{source_range(sb[a], sb[a + 1] - sb[a]), result_at(sb[a])},
         sbb{source_range(sb[b], sb[b + 1] - sb[b]), result_at(sb[b])};
     std::size_t z0 = 0;
-    if (self_pair) {
-      const double d0[3] = {0, 0, 0};
-      if (want_pot) p2p_mutual<K, true>(k_, true, sa, sbb, d0, &z0);
-      else p2p_mutual<K, false>(k_, true, sa, sbb, d0, &z0);
-    } else {
-      (void) sh;
-      const double *de = &d[3 * (std::size_t) first[e]];
-      const int nsh = first[e + 1] - first[e];
+    if (!self_pair) {
+      const double *de = &plan.d[3 * (std::size_t) plan.first[e]];
+      const int nsh = plan.first[e + 1] - plan.first[e];
       if (want_pot) p2p_mutual_shifts<K, true>(k_, sa, sbb, de, nsh, &z0);
       else p2p_mutual_shifts<K, false>(k_, sa, sbb, de, nsh, &z0);
+      return z0;
     }
-    if (self_pair && !self_images.empty()) {
-      const std::size_t t = sb[a], n = sb[a + 1] - sb[a];
-      std::vector<double> x, y, z;
-      for (const auto &img : self_images)
-        for (int sign : {1, -1}) {
-          const signed char s2[3] = {(signed char) (sign * img[0]), (signed char) (sign * img[1]),
-                                     (signed char) (sign * img[2])};
-          grid_shifted_targets(g, t, n, s2, x, y, z);
-          p2p_pg<K, true>(k_, want_pot, {n, x.data(), y.data(), z.data()}, source_range(t, n), result_at(t), &z0);
-        }
-    }
+    const double d0[3] = {0, 0, 0};
+    if (want_pot) p2p_mutual<K, true>(k_, true, sa, sbb, d0, &z0);
+    else p2p_mutual<K, false>(k_, true, sa, sbb, d0, &z0);
+    const std::size_t t = sb[a], n = sb[a + 1] - sb[a];
+    std::vector<double> x, y, z;
+    for (const auto &img : plan.self_images)
+      for (int sign : {1, -1}) {
+        const signed char s2[3] = {(signed char) (sign * img[0]), (signed char) (sign * img[1]),
+                                   (signed char) (sign * img[2])};
+        grid_shifted_targets(g, t, n, s2, x, y, z);
+        p2p_pg<K, true>(k_, want_pot, {n, x.data(), y.data(), z.data()}, source_range(t, n), result_at(t), &z0);
+      }
     return z0;
   });
 }

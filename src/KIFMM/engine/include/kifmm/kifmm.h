@@ -208,7 +208,7 @@ struct TreeChoice {
 // grid (periodic): also the single-level grids
 // k = 3 .. max_grid_cells(order) on uniform counts (cost_model.h), chosen with the rule of the
 // choice from the points below (TreeChoice::grid; the octree's leaf size and depth are kept).
-// shape (periodic, Options::root_shape; null: a cube): grids of nearly cubic cells only, and in
+// shape (periodic, Options::root_shape; null: a cube): grids whose cells fit (grid_fits_cell), and in
 // cells the octree does not fit (octree_fits_cell) only grids (grid 0 returned: none fits).
 TreeChoice choose_tree(int order, std::size_t n, bool periodic, bool grid = false, const double *shape = nullptr,
                        double near_pair_weight = 1.0);

@@ -338,6 +338,14 @@ double grid_modelled_cells(const int kd[3], bool open_z)
   return grid_length_factor(kd, open_z) * kd[0] * kd[1] * (open_z ? 2 * kd[2] : kd[2]);
 }
 
+// near-field depth per axis of the grid of kd cells in a periodic cell of this shape
+void grid_near_depth_of(const int kd[3], const double *shape, int near[3])
+{
+  double cs[3], ss[3];
+  grid_cell_shape(kd, shape, cs);
+  grid_near_depth(cs, near, ss);
+}
+
 TreeCounts uniform_grid_counts(std::size_t n, int k, const double *shape, bool open_z)
 {
   TreeCounts t;
@@ -345,9 +353,7 @@ TreeCounts uniform_grid_counts(std::size_t n, int k, const double *shape, bool o
   grid_cells_per_axis(k, shape, kd);
   const double cells = (double) kd[0] * kd[1] * kd[2], m = (double) n / cells;
   int near[3];
-  double cs[3], ss[3];
-  grid_cell_shape(kd, shape, cs);
-  grid_near_depth(cs, near, ss);
+  grid_near_depth_of(kd, shape, near);
   // a slab: the z boundary layers have no neighbours across the open faces (with the 26
   // neighbours, on average 9 (3 - 2 / kz) neighbour cells)
   double along_z = 2 * near[2] + 1;
@@ -375,9 +381,7 @@ TreeCounts grid_counts(std::size_t n, const double *xyz, const double center[3],
   for (std::size_t i = 0; i < n; ++i) occ[grid_cell_index(xyz + 3 * i, center, half_width, shape, kd)] += 1;
   TreeCounts t;
   int near[3];
-  double cs[3], ss[3];
-  grid_cell_shape(kd, shape, cs);
-  grid_near_depth(cs, near, ss);
+  grid_near_depth_of(kd, shape, near);
   const auto offsets = grid_near_offsets(near);
   t.cells = grid_modelled_cells(kd, open_z);    // a slab: the convolution zero-padded along z
   t.entries = 14.0 * kc;

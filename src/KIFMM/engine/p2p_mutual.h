@@ -15,6 +15,7 @@
 #include "kernels.h"
 #include "p2p.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -96,15 +97,18 @@ inline void p2p_mutual_laplace_avx512(const MutualSpan &A, const MutualSpan &B, 
   while (reinterpret_cast<std::uintptr_t>(base) % 64 != 0) ++base;
   double *cx = base, *cy = cx + nbp, *cz = cy + nbp, *cq = cz + nbp, *cp = cq + nbp, *cgx = cp + nbp,
          *cgy = cgx + nbp, *cgz = cgy + nbp;
-  for (std::size_t j = 0; j < nbp; ++j) {
-    const bool in = j < nb;
-    const std::size_t s = in ? j / nb1 : 0, jb = in ? j - s * nb1 : 0;
-    cx[j] = in ? bx[jb] + sh[3 * s] : 1e100;    // padding: far away, q = 0
-    cy[j] = in ? by[jb] + sh[3 * s + 1] : 1e100;
-    cz[j] = in ? bz[jb] + sh[3 * s + 2] : 1e100;
-    cq[j] = in ? bq[jb] : 0.0;
-    cp[j] = cgx[j] = cgy[j] = cgz[j] = 0.0;
+  for (int s = 0; s < nsh; ++s)
+    for (std::size_t jb = 0, j = s * nb1; jb < nb1; ++jb, ++j) {
+      cx[j] = bx[jb] + sh[3 * s];
+      cy[j] = by[jb] + sh[3 * s + 1];
+      cz[j] = bz[jb] + sh[3 * s + 2];
+      cq[j] = bq[jb];
+    }
+  for (std::size_t j = nb; j < nbp; ++j) {    // padding: far away, q = 0
+    cx[j] = cy[j] = cz[j] = 1e100;
+    cq[j] = 0.0;
   }
+  std::fill(cp, cp + 4 * nbp, 0.0);    // pot gx gy gz
   const __m512d zero = _mm512_setzero_pd();
   std::size_t zeros = 0;
   std::size_t i = 0;
@@ -136,13 +140,13 @@ inline void p2p_mutual_laplace_avx512(const MutualSpan &A, const MutualSpan &B, 
     agy[i] += _mm512_reduce_add_pd(acy[0]);
     agz[i] += _mm512_reduce_add_pd(acz[0]);
   }
-  for (std::size_t j = 0; j < nb; ++j) {
-    const std::size_t jb = j % nb1;
-    if constexpr (POT) bp[jb] += cp[j];
-    bgx[jb] += cgx[j];
-    bgy[jb] += cgy[j];
-    bgz[jb] += cgz[j];
-  }
+  for (int s = 0; s < nsh; ++s)
+    for (std::size_t jb = 0, j = s * nb1; jb < nb1; ++jb, ++j) {
+      if constexpr (POT) bp[jb] += cp[j];
+      bgx[jb] += cgx[j];
+      bgy[jb] += cgy[j];
+      bgz[jb] += cgz[j];
+    }
   if (n_zero) *n_zero += 2 * zeros;
 }
 #endif

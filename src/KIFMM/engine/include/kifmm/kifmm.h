@@ -276,11 +276,6 @@ inline void grid_near_depth(const double cs[3], int m[3], double ss[3])
     ss[d] = stretched ? 1.0 : cs[d];
   }
 }
-// Cells in the near field of one cell (grid_near_depth's m): (2 m_x + 1)(2 m_y + 1)(2 m_z + 1).
-inline int grid_near_cells(const int m[3])
-{
-  return (2 * m[0] + 1) * (2 * m[1] + 1) * (2 * m[2] + 1);
-}
 
 
 

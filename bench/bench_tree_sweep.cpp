@@ -12,6 +12,9 @@
 // leaf and depth, their median times, and auto / best (median over the rounds of the per-round
 // ratios; 1.00 = the automatic tree is the fastest of the sweep). "leaf (= L)": the automatic
 // tree is the swept tree of leaf L (same depth and modelled cost), whose times it takes.
+// "tuned": the tree kspace_style kifmm keeps after timing the trees near the automatic one
+// (kifmm::TreeTuner), and tuned / best as auto / best; "tuning evaluations": how many it timed
+// (the trees timed are printed on stderr).
 //   bench_tree_sweep [--sets uniform,plummer,clusters] [--sizes 1e3,1e4,1e5] [--orders 3,6,9,12]
 //                    [--periodic] [--reps 3] [--min-time 0.2] [--factor 1.41] [--min-leaf 8]
 //                    [--data F.data,...]
@@ -127,6 +130,39 @@ void sweep(const Case &c, int order, bool periodic, int reps, double min_time, d
         if (cands[i].leaf == it->second && cands[i].grid == 0) same = (int) i;
   }
   cands.push_back(Candidate{autom.leaf_size, choice.depth, {}});
+  std::vector<double> pot(n), grad(3 * n);
+  // the tuned tree, as kspace_style kifmm tunes it: a walk along the trees near the automatic
+  // one, each timed on one or two evaluations (kifmm::TreeTuner)
+  kifmm::TreeTuner tuner(kernel, request, autom, n, c.pts.xyz.data());
+  std::unique_ptr<kifmm::Evaluator> tuned_ev = kifmm::make_evaluator(kernel, autom);
+  while (tuner.tuning()) {
+    tuner.select(tuned_ev);
+    const double t0 = cpu_now();
+    tuned_ev->evaluate(n, c.pts.xyz.data(), c.pts.q.data(), n, c.pts.xyz.data(), pot.data(), grad.data());
+    tuner.record(cpu_now() - t0 - tuned_ev->stats().t_precompute);
+  }
+  const kifmm::TreeChoice tuned = tuner.finish(tuned_ev);
+  for (const auto &t : tuner.timed())    // the trees timed: modelled and least timed
+    std::fprintf(stderr, "%s %zu p%d tuning %s: modelled %.4g s, timed %.4g s (%d)\n", c.name.c_str(), n, order,
+                 tree_label(t.tree.grid, t.tree.leaf_size).c_str(), t.tree.cost, t.least, t.evaluations);
+  // the tuned tree's times: the automatic tree's, a swept tree's (same grid, or same depth and
+  // modelled cost), or its own
+  int tuned_same = -1;
+  if (tuned.grid == autom.periodic_grid && (tuned.grid > 0 || tuned.leaf_size == autom.leaf_size)) {
+    tuned_same = (int) cands.size() - 1;
+  } else if (tuned.grid > 0) {
+    for (std::size_t i = 0; i + 1 < cands.size(); ++i)
+      if (cands[i].grid == tuned.grid) tuned_same = (int) i;
+  } else {
+    const kifmm::TreeChoice tm = kifmm::model_tree(kernel, autom, n, c.pts.xyz.data(), tuned.leaf_size);
+    const auto it = seen.find(std::make_pair(tm.depth, tm.cost));
+    for (std::size_t i = 0; it != seen.end() && i + 1 < cands.size(); ++i)
+      if (cands[i].grid == 0 && cands[i].leaf == it->second) tuned_same = (int) i;
+  }
+  if (tuned_same < 0) {
+    cands.insert(cands.end() - 1, Candidate{tuned.leaf_size, tuned.depth, {}, tuned.grid});
+    tuned_same = (int) cands.size() - 2;
+  }
   std::vector<std::unique_ptr<kifmm::Evaluator>> evs;
   for (std::size_t i = 0; i < cands.size(); ++i) {
     kifmm::Options o = opt;
@@ -135,7 +171,6 @@ void sweep(const Case &c, int order, bool periodic, int reps, double min_time, d
     if (i + 1 == cands.size()) o = autom;
     evs.push_back(kifmm::make_evaluator(kernel, o));
   }
-  std::vector<double> pot(n), grad(3 * n);
   for (auto &ev : evs)    // warm-up: operators, first-touch memory
     ev->evaluate(n, c.pts.xyz.data(), c.pts.q.data(), n, c.pts.xyz.data(), pot.data(), grad.data());
   for (std::size_t i = 0; i + 1 < cands.size(); ++i) cands[i].depth = evs[i]->stats().depth;
@@ -151,13 +186,19 @@ void sweep(const Case &c, int order, bool periodic, int reps, double min_time, d
   for (std::size_t i = 1; i + 1 < m; ++i)
     if (median(cands[i].times) < median(cands[best].times)) best = i;
   const std::vector<double> &auto_times = same >= 0 ? cands[same].times : cands.back().times;
-  std::vector<double> ratio;
-  for (int r = 0; r < reps; ++r) ratio.push_back(auto_times[r] / cands[best].times[r]);
-  const Candidate &a = cands.back(), &b = cands[best];
-  std::printf("| %s | %zu | %d | %s / %s | %d / %d | %.4g / %.4g | %.2f | %zu |\n", c.name.c_str(), n, order,
+  const std::vector<double> &tuned_times = (std::size_t) tuned_same + 1 == m ? auto_times : cands[tuned_same].times;
+  std::vector<double> ratio, tuned_ratio;
+  for (int r = 0; r < reps; ++r) {
+    ratio.push_back(auto_times[r] / cands[best].times[r]);
+    tuned_ratio.push_back(tuned_times[r] / cands[best].times[r]);
+  }
+  const Candidate &a = cands.back(), &b = cands[best], &t = cands[tuned_same];
+  const std::string tuned_label = (std::size_t) tuned_same + 1 == m ? tree_label(grid, a.leaf) : tree_label(t.grid, t.leaf);
+  std::printf("| %s | %zu | %d | %s / %s / %s | %d / %d / %d | %.4g / %.4g | %.2f | %.2f | %zu | %d |\n",
+              c.name.c_str(), n, order,
               (tree_label(grid, a.leaf) + (same >= 0 ? " (= " + std::to_string(cands[same].leaf) + ")" : "")).c_str(),
-              tree_label(b.grid, b.leaf).c_str(), a.depth, b.depth, median(auto_times), median(b.times),
-              median(ratio), m - 1);
+              tuned_label.c_str(), tree_label(b.grid, b.leaf).c_str(), a.depth, t.depth, b.depth,
+              median(tuned_times), median(b.times), median(ratio), median(tuned_ratio), m - 1, tuner.evaluations());
   std::fflush(stdout);
 }
 
@@ -208,8 +249,9 @@ int main(int argc, char **argv)
   }
   std::printf("%s boundaries; CPU s per evaluation, one thread (medians of %d rounds, each over >= %g s)\n\n",
               periodic ? "periodic (cell [-1,1]^3, neutral charges)" : "open", reps, min_time);
-  std::printf("| points | N | p | leaf auto / best | depth auto / best | s auto / best | auto/best | trees swept |\n");
-  std::printf("|---|---|---|---|---|---|---|---|\n");
+  std::printf("| points | N | p | leaf auto / tuned / best | depth auto / tuned / best | s tuned / best | auto/best | "
+              "tuned/best | trees swept | tuning evaluations |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
   for (auto &c : cases) {
     if (periodic) c.pts = bench::into_periodic_cell(c.pts);
     for (double p : orders) sweep(c, (int) p, periodic, reps, min_time, factor, min_leaf);

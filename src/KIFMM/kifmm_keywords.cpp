@@ -27,6 +27,16 @@ bool to_int(const std::string &s, int &n)
   n = (int) v;
   return true;
 }
+
+// keyword yes|no at args[i]: "" or the error text (who: the command's prefix)
+std::string yes_no(const std::vector<std::string> &args, std::size_t i, const std::string &who, bool &value)
+{
+  const std::string &kw = args[i];
+  if (i + 1 >= args.size()) return who + "keyword '" + kw + "' needs a value: yes or no";
+  if (args[i + 1] != "yes" && args[i + 1] != "no") return who + kw + " '" + args[i + 1] + "' must be yes or no";
+  value = args[i + 1] == "yes";
+  return "";
+}
 }    // namespace
 
 const char *kernel_name(LongRangeKernel kernel)
@@ -61,7 +71,7 @@ std::string parse_kifmm_keywords(const std::vector<std::string> &args, KIFMMSett
   if (args.empty() || args[0] != "kifmm") return "kspace_modify: expected keyword 'kifmm'";
   const std::string who = "kspace_modify kifmm: ";
   size_t i = 1;
-  if (args.size() == 1) return who + "no keyword given (kernel, order, leaf, grid, check, jeans or cache)";
+  if (args.size() == 1) return who + "no keyword given (kernel, order, leaf, grid, tune, check, jeans or cache)";
   while (i < args.size()) {
     const std::string &kw = args[i];
     if (kw == "kernel") {
@@ -119,6 +129,10 @@ std::string parse_kifmm_keywords(const std::vector<std::string> &args, KIFMMSett
       else
         s.grid = k;
       i += 2;
+    } else if (kw == "tune" || kw == "jeans") {
+      const std::string why = yes_no(args, i, who, kw == "tune" ? s.tune : s.jeans);
+      if (!why.empty()) return why;
+      i += 2;
     } else if (kw == "check") {
       if (i + 2 >= args.size()) return who + "keyword 'check' needs 2 values: EVERY NSAMPLE";
       int every, n;
@@ -129,15 +143,6 @@ std::string parse_kifmm_keywords(const std::vector<std::string> &args, KIFMMSett
       s.check_every = every;
       s.check_samples = n;
       i += 3;
-    } else if (kw == "jeans") {
-      if (i + 1 >= args.size()) return who + "keyword 'jeans' needs a value: yes or no";
-      if (args[i + 1] == "yes")
-        s.jeans = true;
-      else if (args[i + 1] == "no")
-        s.jeans = false;
-      else
-        return who + "jeans '" + args[i + 1] + "' must be yes or no";
-      i += 2;
     } else if (kw == "cache") {
       if (i + 1 >= args.size()) return who + "keyword 'cache' needs a directory or 'none'";
       s.cache_dir = args[i + 1];

@@ -21,6 +21,8 @@ struct KIFMMSettings {
   // periodic, one rank: -1 = auto (the single-level grid when the cost model prefers it to the
   // octree), 0 = no (octree), k = grid of k^3 cells (kifmm::Options::periodic_grid)
   int grid = -1;
+  bool tune = true;          // tree (leaf size or grid) not given: time the trees near the modelled
+                             // choice on the first evaluations of a run (kifmm::TreeTuner)
   int check_every = 0;       // 0 = off; else measure the error every N steps
   int check_samples = 0;
   std::string cache_dir;     // "" = default location; "none" = in-memory only

@@ -280,6 +280,8 @@ void KSpaceKIFMM::init_style_and_engine()
   const kifmm::TreeChoice &tree = plan.uniform;
   const bool grid_auto = periodic && kset.grid < 0;
   tree_choice_pending = plan.from_points;
+  tune_pending = kset.tune;
+  tuner = kifmm::TreeTuner();
 
   if (!engine || engine_options.order != opt.order || engine_options.leaf_size != opt.leaf_size ||
       engine_options.cache_dir != opt.cache_dir || engine_options.periodic != opt.periodic ||
@@ -539,6 +541,7 @@ void KSpaceKIFMM::compute_step(int eflag, int vflag)
   const std::size_t n = index.size();
 
   update_slab_extent();
+  select_tuned_tree();
   if (periodic) periodic_cell();    // the box is the cell (it may have changed)
   if (tree_choice_pending) choose_tree_from_atoms();
   // induced dipoles first (kspace_kifmm_polarize.cpp); an energy-only evaluation of fix
@@ -554,8 +557,11 @@ void KSpaceKIFMM::compute_step(int eflag, int vflag)
   check_pebble_dipoles();
   double comm_time = 0;
   std::size_t nsrc = 0;    // sources of all ranks (same value on every rank)
+  const double t_evaluation = MPI_Wtime();
   evaluate_points(want_potential, comm_time, nsrc);
+  const double evaluation_seconds = MPI_Wtime() - t_evaluation - engine->stats().t_precompute;
   if (verify_pending) verify_accuracy(want_potential, comm_time, nsrc);
+  tune_tree(evaluation_seconds, want_potential, comm_time, nsrc);
   const kifmm::Stats no_work;
   const kifmm::Stats &phases = nsrc > 0 || distributed() ? engine->stats() : no_work;
 

@@ -58,6 +58,14 @@ class KSpaceKIFMM : public KSpace {
   bool tree_choice_pending = false;
   kifmm::TreeRequest tree_request;    // what the tree is chosen from (init)
   void choose_tree_from_atoms();
+  // tune yes (the default): after the first evaluation of a run (and its accuracy check), the
+  // trees near the chosen one are timed on the next evaluations and the fastest kept
+  // (kifmm::TreeTuner; kspace_kifmm_tuning.cpp)
+  bool tune_pending = false;
+  kifmm::TreeTuner tuner;
+  void select_tuned_tree();
+  void tune_tree(double seconds, bool want_potential, double &comm_time, std::size_t &nsrc);
+  void finish_tuning();
   KIFMMTiming run_timing;
   double memory_limit_mb = 0;    // 0 = unknown: no check
 

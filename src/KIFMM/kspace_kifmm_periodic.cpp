@@ -253,6 +253,7 @@ void KSpaceKIFMM::periodic_cell()
     octree.periodic_grid = 0;
     engine = kifmm::make_evaluator(engine->kernel(), octree);
     engine_options = engine->options();
+    tuner = kifmm::TreeTuner();    // the trees being timed were grids of this size
     reported_first_evaluation = false;
     if (comm->me == 0)
       utils::logmesg(lmp,
@@ -271,6 +272,7 @@ void KSpaceKIFMM::periodic_cell()
   if (refit.periodic_grid == was_grid) return;    // the octree kept: no grid fits (warned)
   engine = kifmm::make_evaluator(engine->kernel(), refit);
   engine_options = engine->options();
+  tuner = kifmm::TreeTuner();    // the trees being timed no longer fit
   reported_first_evaluation = false;
   if (comm->me == 0)
     utils::logmesg(lmp,

@@ -60,6 +60,23 @@ TEST(KifmmKeywords, ErrorsNameTheBadToken)
   EXPECT_NE(parse({"kifmm", "order"}, s, n).find("needs a value"), std::string::npos);
 }
 
+TEST(KifmmKeywords, YesNoKeywords)
+{
+  KIFMMSettings s;
+  int n = 0;
+  EXPECT_TRUE(s.tune);
+  EXPECT_FALSE(s.jeans);
+  EXPECT_EQ(parse({"kifmm", "tune", "no", "jeans", "yes"}, s, n), "");
+  EXPECT_EQ(n, 5);
+  EXPECT_FALSE(s.tune);
+  EXPECT_TRUE(s.jeans);
+  EXPECT_EQ(parse({"kifmm", "tune", "yes"}, s, n), "");
+  EXPECT_TRUE(s.tune);
+  EXPECT_NE(parse({"kifmm", "tune"}, s, n).find("'tune' needs a value: yes or no"), std::string::npos);
+  EXPECT_NE(parse({"kifmm", "tune", "maybe"}, s, n).find("tune 'maybe' must be yes or no"), std::string::npos);
+  EXPECT_NE(parse({"kifmm", "jeans", "1"}, s, n).find("jeans '1' must be yes or no"), std::string::npos);
+}
+
 TEST(KifmmKeywords, StopsAtGenericKspaceModifyKeywords)
 {
   KIFMMSettings s;

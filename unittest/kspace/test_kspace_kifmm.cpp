@@ -663,6 +663,56 @@ TEST_F(KSpaceKifmm, MpiDistributedCheckMeasuresTheFullError)
   EXPECT_NEAR(measured, full, 1e-3 * full);    // every atom sampled: the exact error
 }
 
+// Tuning (the default): after the first evaluation the trees near the modelled choice are timed
+// on the next evaluations and the fastest kept; every evaluation, during tuning and after, meets
+// the requested accuracy. On several ranks the ranks agree (the slowest rank's times) and the
+// trees are modelled on uniformly spread atoms. tune no: no tuning.
+TEST_F(KSpaceKifmm, MpiDistributedTreeTuningKeepsTheAccuracy)
+{
+  Configuration c = two_clusters(1500, 13);
+  Configuration u = uniform_cube(1500, 14);
+  c.x.insert(c.x.end(), u.x.begin(), u.x.end());
+  c.q.insert(c.q.end(), u.q.begin(), u.q.end());
+  load(c);
+  Result ref = exact();
+  commands("pair_style zero 0.01\npair_coeff * *\nkspace_style kifmm 1e-5\nkspace_modify kifmm check 1 3000");
+  const std::string out = captured("run 30 post no");
+  const Result r{forces_by_id(), 0.0};
+  EXPECT_LE(relative_force_error(r.f, ref.f), 1e-5);
+  int me = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &me);
+  if (me == 0) {
+    // each evaluation's error, measured on all atoms (check 1 3000)
+    int checks = 0;
+    for (std::size_t at = out.find("KIFMM check at step "); at != std::string::npos;
+         at = out.find("KIFMM check at step ", at + 1)) {
+      int step = 0;
+      double e = 1;
+      ASSERT_EQ(std::sscanf(out.c_str() + at, "KIFMM check at step %d: measured relative force error %lf", &step, &e), 2);
+      EXPECT_LE(e, 1e-5) << "step " << step;
+      ++checks;
+    }
+    EXPECT_EQ(checks, 31);
+    const std::size_t at = out.find("KIFMM tree tuned on ");
+    ASSERT_NE(at, std::string::npos) << out;
+    int evaluations = 0;
+    ASSERT_EQ(std::sscanf(out.c_str() + at, "KIFMM tree tuned on %d evaluations", &evaluations), 1);
+    EXPECT_GE(evaluations, 2);
+    EXPECT_LE(evaluations, 2 * kifmm::kTuneTrees);
+    const std::string line = out.substr(at, out.find('\n', at) - at);
+    for (std::size_t r = out.find("KIFMM tuning: "); r != std::string::npos; r = out.find("KIFMM tuning: ", r + 1))
+      std::printf("  %s\n", out.substr(r, out.find('\n', r) - r).c_str());
+    std::printf("  %s\n", line.c_str());
+    EXPECT_NE(line.find("least time per evaluation: "), std::string::npos) << line;
+    // another tree than the modelled choice: its error is measured again
+    if (line.find("the modelled choice kept") == std::string::npos)
+      EXPECT_NE(out.find("measured relative error", at), std::string::npos) << out;
+  }
+  commands("kspace_modify kifmm tune no check 0 1");
+  const std::string fixed = captured("run 3 post no");
+  EXPECT_EQ(fixed.find("tree tuned"), std::string::npos) << fixed;
+}
+
 // ---------------------------------------------------------------- YAML references
 
 TEST_F(KSpaceKifmm, YamlReferenceCoulomb)

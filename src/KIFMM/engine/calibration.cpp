@@ -593,6 +593,17 @@ TreeChoice model_tree(const KernelSpec &kernel, const Options &options, std::siz
   return model_leaf(pts, options, n, std::max(1, leaf_size));
 }
 
+TreeChoice model_grid(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz, int k)
+{
+  const bool open_z = options.periodic_dims == 2;
+  const ChoicePoints pts(kernel, options, n, xyz);
+  const double *sh = pts.root.cubic() ? nullptr : options.root_shape;
+  if (!options.periodic || !grid_fits_cell(options.order, k, sh, open_z)) return TreeChoice{options.leaf_size, 0, -1.0, 0};
+  const TreeCounts c = n == 0 ? uniform_grid_counts(0, k, sh, open_z)
+                              : grid_counts(n, pts.xyz, options.root_center, options.root_half_width, k, sh, open_z);
+  return TreeChoice{options.leaf_size, 0, modelled_grid_cost(options.order, n, c, options.near_pair_weight), k};
+}
+
 TreeChoice choose_tree(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz)
 {
   if (options.periodic && options.periodic_dims == 2) {

@@ -299,6 +299,11 @@ TreeChoice choose_tree(const KernelSpec &kernel, const Options &options, std::si
 TreeChoice model_tree(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz,
                       int leaf_size);
 
+// Modelled cost of the periodic single-level grid of k cells along the longest axis
+// (Options::periodic_grid = k) over these points (actual cell occupancies, as above); cost < 0
+// when its cells do not fit the periodic cell (grid_fits_cell) or the options are not periodic.
+TreeChoice model_grid(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz, int k);
+
 // The tree of an N-body evaluation, from what the caller asks for (tree_plan.cpp; what
 // kspace_style kifmm uses). A given leaf size is used as is. Otherwise the uniform choice above
 // for n points, and, when one process holds all the points (not distributed), the choice from
@@ -326,6 +331,85 @@ TreePlan plan_tree(const Options &options, const TreeRequest &request, const Opt
 TreeChoice choose_tree_from_points(const KernelSpec &kernel, const TreeRequest &request, Options &options,
                                    std::size_t n, const double *xyz);
 
+
+// ---- tuning the tree by timing (tree_tuning.cpp)
+// The cost model's residuals (6-17 % RMS per point set, more for the grid on heaped points at
+// low orders) leave its choice up to 1.2x slower than the fastest tree on some sets and orders.
+// Tuning times trees near it on real evaluations (their results are used: every tree has the
+// same order) and keeps the fastest.
+//
+// Two ladders of trees: octrees of leaf sizes 2^(j/2) times the one in use (j = -4 .. 4,
+// distinct trees only: same depth and modelled cost is the same tree) and, when the grid is
+// chosen with the tree (request.grid < 0, periodic), the single-level grids choose_tree offers,
+// by cells per side. Modelled on these points (xyz: one process holds all of them) or, when
+// xyz is null (the distributed evaluation: each rank holds its own points), on n uniformly
+// spread points (octrees of depths 0 .. log8 n): the same on every rank. The search starts at
+// the tree in use (options: its leaf size and grid) and walks its ladder towards the faster
+// neighbour until both neighbours of the fastest are slower; then the same on the other ladder
+// from its tree of least modelled cost, when that is within kTuneOtherLadder of the tree in
+// use's modelled cost. Each tree is timed on two evaluations (the least counts; one when the
+// first is already kTuneSlower times the fastest so far), at most kTuneTrees trees; the tree in
+// use is kept unless another is faster by kTuneMargin. A given leaf size or grid (request) is
+// not tuned.
+//
+// Per evaluation:
+//   select(ev)   before it: ev (the evaluator in use) becomes the one of the tree to time next
+//                when that is another tree (built from options with its leaf size and grid;
+//                the caller sets a changing root on it as on any evaluator);
+//   record(t)    after it: its time in seconds without operator setup (Stats::t_precompute);
+//                on several ranks the same value on every rank (the slowest rank's time).
+// A tree other than the first (the tree in use at the start, whose accuracy the caller knows)
+// may be less accurate (deeper trees: more translations). With an accuracy to keep, after the
+// first evaluation of such a tree (new_tree() true, before record) the caller measures its error
+// and, when it falls short, calls reject(ev) instead of record: the tree is never timed again
+// nor kept, and ev becomes the first tree's evaluator, for the caller to evaluate again.
+// When tuning() is false, finish(ev) makes ev the fastest tree's evaluator and returns that tree.
+constexpr double kTuneOtherLadder = 1.6;
+constexpr double kTuneSlower = 1.5;
+constexpr int kTuneTrees = 12;
+constexpr double kTuneMargin = 0.03;
+class TreeTuner {
+ public:
+  struct Timed {
+    TreeChoice tree;
+    double least = 0;    // least time of its evaluations (s)
+    int evaluations = 0;
+    bool rejected = false;    // its accuracy fell short (reject)
+  };
+  TreeTuner() = default;
+  TreeTuner(const KernelSpec &kernel, const TreeRequest &request, const Options &options, std::size_t n,
+            const double *xyz);
+  bool tuning() const { return !done_; }
+  void select(std::unique_ptr<Evaluator> &ev);
+  void record(double seconds);
+  bool new_tree() const { return tuning() && in_use_ != 0 && timed_[in_use_].evaluations == 0; }
+  void reject(std::unique_ptr<Evaluator> &ev);
+  TreeChoice finish(std::unique_ptr<Evaluator> &ev);
+  const std::vector<Timed> &timed() const { return timed_; }    // in the order timed
+  int evaluations() const { return evaluations_; }
+
+ private:
+  struct Rung {
+    TreeChoice tree;
+    int timed = -1;    // index in timed_ (-1: not timed)
+  };
+  void next_tree();
+  bool walk(int ladder);
+  void start(int ladder, std::size_t rung);
+  KernelSpec kernel_;
+  Options options_;
+  std::vector<Rung> ladders_[2];    // 0: octrees by leaf size, 1: grids by cells per side
+  std::vector<Timed> timed_;
+  int ladder_ = 0;                  // the ladder and rung being timed
+  std::size_t rung_ = 0;
+  int first_ladder_ = 0;
+  long other_start_ = -1;           // the other ladder's start (-1: not searched)
+  std::size_t in_use_ = 0;          // index in timed_ of the evaluator in use
+  int evaluations_ = 0;
+  bool done_ = true;
+};
+// options with the leaf size and single-level grid of this tree
+Options tree_options(const Options &options, const TreeChoice &tree);
 
 // ---- the order for a requested accuracy, measured on the points (order_search.cpp)
 

@@ -1,0 +1,180 @@
+// This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
+// Tuning the tree by timing (kifmm::TreeTuner): the walk along the ladders of octrees and
+// single-level grids on given times (it reaches the fastest tree, keeps the tree in use within
+// the margin, tunes nothing that was given), and real evaluations during tuning, whose results
+// must all be as accurate as the modelled choice's (open: direct sum; periodic: Ewald).
+#include "cost_model.h"
+#include "periodic.h"
+#include "test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <omp.h>
+
+using kifmm::KernelSpec;
+using namespace kifmm_test;
+
+namespace {
+
+// Runs the tuner to its end with the time of each evaluation given by `time` of the evaluator's
+// options (no evaluation); checks that every tree timed is the one the evaluator in use holds.
+kifmm::TreeChoice tune_on(kifmm::TreeTuner &tuner, const kifmm::Options &start,
+                          const std::function<double(const kifmm::Options &)> &time)
+{
+  std::unique_ptr<kifmm::Evaluator> ev = kifmm::make_evaluator(KernelSpec{}, start);
+  int evaluations = 0;
+  while (tuner.tuning() && evaluations < 100) {
+    tuner.select(ev);
+    tuner.record(time(ev->options()));
+    ++evaluations;
+  }
+  EXPECT_FALSE(tuner.tuning());
+  EXPECT_LE((int) tuner.timed().size(), kifmm::kTuneTrees);
+  EXPECT_LE(evaluations, 2 * kifmm::kTuneTrees);
+  EXPECT_EQ(evaluations, tuner.evaluations());
+  const kifmm::TreeChoice t = tuner.finish(ev);
+  EXPECT_EQ(ev->options().leaf_size, t.leaf_size);
+  EXPECT_EQ(ev->options().periodic_grid, t.grid);
+  return t;
+}
+
+// the uniform plan of n points (the distributed evaluation's tree: ladders on uniform points)
+kifmm::Options uniform_start(std::size_t n, bool periodic, int order, int grid_request)
+{
+  kifmm::Options o = periodic ? periodic_options(order, 0) : kifmm::Options{};
+  o.order = order;
+  return kifmm::plan_tree(o, kifmm::TreeRequest{n, 0, grid_request, true}).options;
+}
+
+}    // namespace
+
+TEST(TreeTuning, WalksTheOctreeLadderToTheFastestTree)
+{
+  const std::size_t n = 2000000;
+  const kifmm::Options start = uniform_start(n, false, 6, 0);
+  const int d0 = kifmm::choose_tree(6, n, false).depth;
+  ASSERT_GE(d0, 3);
+  for (int target : {d0 - 2, d0 - 1, d0, d0 + 1}) {
+    kifmm::TreeTuner tuner(KernelSpec{}, kifmm::TreeRequest{n, 0, 0, true}, start, n, nullptr);
+    ASSERT_TRUE(tuner.tuning());
+    // the depth of the uniform tree of this leaf size: time 1 at the target depth, more away
+    const kifmm::TreeChoice t = tune_on(tuner, start, [&](const kifmm::Options &o) {
+      int d = 0;
+      while (kifmm::leaf_size_for_depth(n, d) != o.leaf_size && d < 20) ++d;
+      EXPECT_EQ(o.periodic_grid, 0);
+      return 1.0 + 0.2 * std::abs(d - target);
+    });
+    EXPECT_EQ(t.depth, target);
+    EXPECT_EQ(t.leaf_size, kifmm::leaf_size_for_depth(n, target));
+  }
+}
+
+TEST(TreeTuning, SearchesTheGridsFromTheirModelledBest)
+{
+  // periodic, grid chosen with the tree: the grid ladder from its tree of least modelled cost,
+  // walked to the fastest grid two steps beyond it
+  const std::size_t n = 100000;
+  const int order = 6;
+  const kifmm::Options start = uniform_start(n, true, order, -1);
+  kifmm::TreeTuner probe(KernelSpec{}, kifmm::TreeRequest{n, 0, -1, true}, start, n, nullptr);
+  int k_least = 0;
+  double least = 0;
+  for (int k = 3; k <= kifmm::max_grid_cells_long(order, nullptr); ++k) {
+    if ((double) k * k * k > n) break;
+    const double c = kifmm::modelled_grid_cost(order, n, kifmm::uniform_grid_counts(n, k));
+    if (k_least == 0 || c < least) {
+      least = c;
+      k_least = k;
+    }
+  }
+  const int target = k_least + (start.periodic_grid == k_least ? 2 : 1);
+  kifmm::TreeTuner tuner(KernelSpec{}, kifmm::TreeRequest{n, 0, -1, true}, start, n, nullptr);
+  const kifmm::TreeChoice t = tune_on(tuner, start, [&](const kifmm::Options &o) {
+    return o.periodic_grid > 0 ? 1.0 + 0.1 * std::abs(o.periodic_grid - target) : 2.0;
+  });
+  EXPECT_EQ(t.grid, target);
+}
+
+TEST(TreeTuning, KeepsTheTreeInUseWithinTheMargin)
+{
+  const std::size_t n = 300000;
+  const kifmm::Options start = uniform_start(n, false, 6, 0);
+  kifmm::TreeTuner tuner(KernelSpec{}, kifmm::TreeRequest{n, 0, 0, true}, start, n, nullptr);
+  const kifmm::TreeChoice t = tune_on(tuner, start, [&](const kifmm::Options &o) {
+    return o.leaf_size == start.leaf_size ? 1.0 : 1.0 - 0.5 * kifmm::kTuneMargin;
+  });
+  EXPECT_EQ(t.leaf_size, start.leaf_size);
+  // a clearly slower neighbour is timed once
+  kifmm::TreeTuner slow(KernelSpec{}, kifmm::TreeRequest{n, 0, 0, true}, start, n, nullptr);
+  tune_on(slow, start, [&](const kifmm::Options &o) { return o.leaf_size == start.leaf_size ? 1.0 : 2.0; });
+  for (const auto &c : slow.timed()) EXPECT_EQ(c.evaluations, c.tree.leaf_size == start.leaf_size ? 2 : 1);
+}
+
+TEST(TreeTuning, GivenTreesAreNotTuned)
+{
+  const std::size_t n = 100000;
+  const Points p = neutral(uniform_cube(20000, 3));
+  kifmm::Options o = periodic_options(6, 100);
+  EXPECT_FALSE(kifmm::TreeTuner(KernelSpec{}, kifmm::TreeRequest{n, 100, -1, false}, o, p.size(), p.xyz.data()).tuning());
+  o.periodic_grid = 5;
+  EXPECT_FALSE(kifmm::TreeTuner(KernelSpec{}, kifmm::TreeRequest{n, 0, 5, false}, o, p.size(), p.xyz.data()).tuning());
+  EXPECT_FALSE(kifmm::TreeTuner(KernelSpec{}, kifmm::TreeRequest{0, 0, -1, false}, o, 0, nullptr).tuning());
+  EXPECT_FALSE(kifmm::TreeTuner().tuning());
+  // grid no: octrees only
+  o.periodic_grid = 0;
+  kifmm::TreeTuner octrees(KernelSpec{}, kifmm::TreeRequest{n, 0, 0, false}, o, p.size(), p.xyz.data());
+  tune_on(octrees, o, [](const kifmm::Options &x) { return x.periodic_grid > 0 ? 0.1 : 1.0 + 1e-3 * x.leaf_size; });
+  for (const auto &c : octrees.timed()) EXPECT_EQ(c.tree.grid, 0);
+}
+
+// Real evaluations during tuning on clustered points: every tree timed gives forces as accurate
+// as the modelled choice's, and the ladder on the points holds distinct trees only.
+TEST(TreeTuning, EveryEvaluationWhileTuningIsAccurate)
+{
+  for (bool periodic : {false, true}) {
+    const std::size_t n = 6000;
+    Points p = neutral(two_clusters(n, 5));
+    if (periodic)
+      for (double &x : p.xyz) x = 0.98 * std::tanh(x);
+    kifmm::Options o = periodic ? periodic_options(6, 0) : kifmm::Options{};
+    o.order = 6;
+    const kifmm::TreeRequest request{n, 0, periodic ? -1 : 0, false};
+    o = kifmm::plan_tree(o, request).options;
+    kifmm::choose_tree_from_points(KernelSpec{}, request, o, n, p.xyz.data());
+    std::vector<double> ep(n), eg(3 * n), pot(n), g(3 * n);
+    const double c0[3] = {0, 0, 0};
+    if (periodic)
+      kifmm::periodic_direct_sum(KernelSpec{}, c0, 1.0, n, p.xyz.data(), p.q.data(), n, p.xyz.data(), ep.data(), eg.data());
+    else
+      kifmm::direct_sum(KernelSpec{}, n, p.xyz.data(), p.q.data(), n, p.xyz.data(), ep.data(), eg.data());
+    std::unique_ptr<kifmm::Evaluator> ev = kifmm::make_evaluator(KernelSpec{}, o);
+    ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());
+    const double first = rel_l2(g, eg);
+    kifmm::TreeTuner tuner(KernelSpec{}, request, o, n, p.xyz.data());
+    ASSERT_TRUE(tuner.tuning());
+    while (tuner.tuning()) {
+      tuner.select(ev);
+      const double t0 = omp_get_wtime();
+      ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());
+      tuner.record(omp_get_wtime() - t0 - ev->stats().t_precompute);
+      const double err = rel_l2(g, eg);
+      std::printf("  %s: leaf %d grid %d depth %d: gradient error %.2e (modelled choice %.2e)\n",
+                  periodic ? "periodic" : "open", ev->options().leaf_size, ev->options().periodic_grid,
+                  ev->stats().depth, err, first);
+      EXPECT_LE(err, std::max(4 * first, 1e-6));
+      EXPECT_LE(err, 1e-5);
+    }
+    tuner.finish(ev);
+    ev->evaluate(n, p.xyz.data(), p.q.data(), n, p.xyz.data(), pot.data(), g.data());
+    EXPECT_LE(rel_l2(g, eg), 1e-5);
+    for (std::size_t i = 1; i < tuner.timed().size(); ++i)
+      for (std::size_t j = 0; j < i; ++j) {
+        const auto &a = tuner.timed()[i].tree, &b = tuner.timed()[j].tree;
+        EXPECT_FALSE(a.grid == b.grid && (a.grid > 0 || (a.depth == b.depth && a.cost == b.cost)))
+            << "the same tree timed twice: leaf " << a.leaf_size << " and " << b.leaf_size;
+      }
+  }
+}

@@ -42,6 +42,9 @@ class KSpaceKIFMM : public KSpace {
   double measured_error() const { return last_measured_error; }
   const kifmm::Stats &engine_stats() const;
   int engine_order() const { return engine_options.order; }    // the order in use
+  bool tuning() const { return tuner.tuning(); }               // trees still being timed (tune yes)
+  int engine_leaf_size() const { return engine_options.leaf_size; }
+  int engine_grid() const { return engine_options.periodic_grid; }    // 0: the octree
   // time by phase since the setup of the current run (printed at its end)
   const KIFMMTiming &timing() const { return run_timing; }
 

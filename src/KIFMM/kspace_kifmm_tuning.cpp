@@ -21,19 +21,25 @@ std::string tree_text(const kifmm::TreeChoice &t, const std::string &grid_cells)
 }
 }    // namespace
 
-// before an evaluation: the evaluator of the tree to time next
+// before an evaluation: tuning starts at the second evaluation of a run, once the order is
+// settled (one rank: the trees modelled on its atoms; several: on uniformly spread atoms, the
+// same on every rank); the evaluator of the tree to time next
 void KSpaceKIFMM::select_tuned_tree()
 {
+  if (tune_pending && !verify_pending && !tree_choice_pending) {
+    tune_pending = false;
+    tuner = distributed() ? kifmm::TreeTuner(engine->kernel(), tree_request, engine_options, tree_request.n, nullptr)
+                          : kifmm::TreeTuner(engine->kernel(), tree_request, engine_options, strength.size(), xyz.data());
+  }
   if (!tuner.tuning()) return;
   tuner.select(engine);
   engine_options = engine->options();
 }
 
-// after an evaluation (seconds: its time without operator setup): start tuning after the first
-// evaluation of the run once the order is settled, or record the time (the slowest rank's). With
-// an order from the accuracy, the first evaluation of each new tree has its error measured on the
-// atoms as at the start of the run; a tree that falls short is dropped and the evaluation done
-// again on the first tree.
+// after an evaluation (seconds: its time without operator setup): the time recorded (the
+// slowest rank's). With an order from the accuracy, the first evaluation of each new tree has its
+// error measured on the atoms as at the start of the run; a tree that falls short is dropped and
+// the evaluation done again on the first tree.
 void KSpaceKIFMM::tune_tree(double seconds, bool want_potential, double &comm_time, std::size_t &nsrc)
 {
   if (tuner.tuning() && tuner.new_tree() && estimated_error >= 0) {
@@ -52,18 +58,11 @@ void KSpaceKIFMM::tune_tree(double seconds, bool want_potential, double &comm_ti
       return;
     }
   }
-  if (tuner.tuning()) {
-    double slowest = seconds;
-    MPI_Allreduce(&seconds, &slowest, 1, MPI_DOUBLE, MPI_MAX, world);
-    tuner.record(slowest);
-    if (!tuner.tuning()) finish_tuning();
-    return;
-  }
-  if (!tune_pending || verify_pending || tree_choice_pending) return;
-  tune_pending = false;
-  // one rank: modelled on its atoms; several: on uniformly spread atoms (the same on every rank)
-  tuner = distributed() ? kifmm::TreeTuner(engine->kernel(), tree_request, engine_options, tree_request.n, nullptr)
-                        : kifmm::TreeTuner(engine->kernel(), tree_request, engine_options, strength.size(), xyz.data());
+  if (!tuner.tuning()) return;
+  double slowest = seconds;
+  MPI_Allreduce(&seconds, &slowest, 1, MPI_DOUBLE, MPI_MAX, world);
+  tuner.record(slowest);
+  if (!tuner.tuning()) finish_tuning();
 }
 
 void KSpaceKIFMM::finish_tuning()
@@ -78,10 +77,10 @@ void KSpaceKIFMM::finish_tuning()
   if (comm->me != 0) return;
   std::string times;
   for (const auto &c : timed)
-    times += fmt::format("{}{} {:.4g} s", times.empty() ? "" : ", ",
+    times += fmt::format("{}{} {}", times.empty() ? "" : ", ",
                          c.tree.grid > 0 ? "grid " + grid_cells_text(kifmm::tree_options(engine_options, c.tree))
                                          : "leaf " + std::to_string(c.tree.leaf_size),
-                         c.least);
+                         c.rejected ? std::string("not used (error)") : fmt::format("{:.4g} s", c.least));
   double least = timed.front().least;
   for (const auto &c : timed)
     if (c.tree.grid == t.grid && c.tree.leaf_size == t.leaf_size) least = c.least;

@@ -26,14 +26,14 @@ kifmm::TreeChoice tune_on(kifmm::TreeTuner &tuner, const kifmm::Options &start,
 {
   std::unique_ptr<kifmm::Evaluator> ev = kifmm::make_evaluator(KernelSpec{}, start);
   int evaluations = 0;
-  while (tuner.tuning() && evaluations < 100) {
+  while (tuner.tuning() && evaluations < 1000) {
     tuner.select(ev);
     tuner.record(time(ev->options()));
     ++evaluations;
   }
   EXPECT_FALSE(tuner.tuning());
   EXPECT_LE((int) tuner.timed().size(), kifmm::kTuneTrees);
-  EXPECT_LE(evaluations, 2 * kifmm::kTuneTrees);
+  EXPECT_LE(evaluations, kifmm::kTuneRepeats * kifmm::kTuneTrees);
   EXPECT_EQ(evaluations, tuner.evaluations());
   const kifmm::TreeChoice t = tuner.finish(ev);
   EXPECT_EQ(ev->options().leaf_size, t.leaf_size);
@@ -111,6 +111,13 @@ TEST(TreeTuning, KeepsTheTreeInUseWithinTheMargin)
   kifmm::TreeTuner slow(KernelSpec{}, kifmm::TreeRequest{n, 0, 0, true}, start, n, nullptr);
   tune_on(slow, start, [&](const kifmm::Options &o) { return o.leaf_size == start.leaf_size ? 1.0 : 2.0; });
   for (const auto &c : slow.timed()) EXPECT_EQ(c.evaluations, c.tree.leaf_size == start.leaf_size ? 2 : 1);
+  // fast evaluations are repeated until they add up to kTuneMinSeconds (at most kTuneRepeats)
+  for (double t : {1e-3, 0.01}) {
+    kifmm::TreeTuner fast(KernelSpec{}, kifmm::TreeRequest{n, 0, 0, true}, start, n, nullptr);
+    tune_on(fast, start, [&](const kifmm::Options &) { return t; });
+    const int expected = std::min(kifmm::kTuneRepeats, (int) std::ceil(kifmm::kTuneMinSeconds / t - 1e-9));
+    for (const auto &c : fast.timed()) EXPECT_EQ(c.evaluations, expected) << t;
+  }
 }
 
 TEST(TreeTuning, GivenTreesAreNotTuned)

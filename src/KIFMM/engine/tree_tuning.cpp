@@ -137,11 +137,13 @@ void TreeTuner::record(double seconds)
   ++evaluations_;
   Timed &t = timed_[in_use_];
   t.least = std::min(t.least, seconds);
+  t.total += seconds;
   ++t.evaluations;
   double fastest_other = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < timed_.size(); ++i)
     if (i != in_use_) fastest_other = std::min(fastest_other, timed_[i].least);
-  if (t.evaluations < 2 && !(t.least > kTuneSlower * fastest_other)) return;    // timed again
+  const bool enough = t.evaluations >= 2 && (t.total >= kTuneMinSeconds || t.evaluations >= kTuneRepeats);
+  if (!enough && !(t.least > kTuneSlower * fastest_other)) return;    // timed again
   next_tree();
 }
 

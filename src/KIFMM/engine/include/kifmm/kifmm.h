@@ -347,8 +347,10 @@ TreeChoice choose_tree_from_points(const KernelSpec &kernel, const TreeRequest &
 // the tree in use (options: its leaf size and grid) and walks its ladder towards the faster
 // neighbour until both neighbours of the fastest are slower; then the same on the other ladder
 // from its tree of least modelled cost, when that is within kTuneOtherLadder of the tree in
-// use's modelled cost. Each tree is timed on two evaluations (the least counts; one when the
-// first is already kTuneSlower times the fastest so far), at most kTuneTrees trees; the tree in
+// use's modelled cost. Each tree is timed on two evaluations or more, until they add up to
+// kTuneMinSeconds (at most kTuneRepeats; the least counts, as the least disturbed by other
+// work on the machine; one when the first already takes kTuneSlower times the fastest so
+// far), at most kTuneTrees trees; the tree in
 // use is kept unless another is faster by kTuneMargin. A given leaf size or grid (request) is
 // not tuned.
 //
@@ -367,12 +369,15 @@ TreeChoice choose_tree_from_points(const KernelSpec &kernel, const TreeRequest &
 constexpr double kTuneOtherLadder = 1.6;
 constexpr double kTuneSlower = 1.5;
 constexpr int kTuneTrees = 12;
+constexpr double kTuneMinSeconds = 0.05;
+constexpr int kTuneRepeats = 8;
 constexpr double kTuneMargin = 0.03;
 class TreeTuner {
  public:
   struct Timed {
     TreeChoice tree;
     double least = 0;    // least time of its evaluations (s)
+    double total = 0;    // their sum (s)
     int evaluations = 0;
     bool rejected = false;    // its accuracy fell short (reject)
   };

@@ -85,10 +85,67 @@ double time_evaluation(kifmm::Evaluator &ev, const bench::Points &p, std::vector
   return t / k;
 }
 
+// the swept trees: distinct trees only (same depth and modelled cost = same tree; seen maps
+// them to their leaf) and, periodic, every single-level grid within the engine's memory bound
+// with at least 2 points per cell on average
+std::vector<Candidate> swept_trees(const Case &c, const kifmm::Options &opt, double factor, double min_leaf,
+                                   std::map<std::pair<int, double>, int> &seen)
+{
+  const std::size_t n = c.pts.size();
+  std::vector<Candidate> cands;
+  for (double leaf = 8; leaf <= 8192 && leaf <= 2.0 * n; leaf *= factor) {
+    if (leaf < min_leaf) continue;
+    const int l = (int) std::lround(leaf);
+    const kifmm::TreeChoice m = kifmm::model_tree(kifmm::KernelSpec{}, opt, n, c.pts.xyz.data(), l);
+    if (seen.emplace(std::make_pair(m.depth, m.cost), l).second) cands.push_back(Candidate{l, m.depth, {}});
+  }
+  if (opt.periodic)
+    for (int k = 3; k <= kifmm::max_grid_cells_long(opt.order, nullptr) && (k == 3 || 2.0 * k * k * k <= n); ++k)
+      cands.push_back(Candidate{0, 1, {}, k});
+  return cands;
+}
+
+// the swept tree that is this tree (the same grid, or the same depth and modelled cost), or -1
+int same_swept(const std::vector<Candidate> &cands, const std::map<std::pair<int, double>, int> &seen,
+               const Case &c, const kifmm::Options &opt, int leaf, int grid)
+{
+  int leaf_seen = -1;
+  if (grid == 0) {
+    const kifmm::TreeChoice m = kifmm::model_tree(kifmm::KernelSpec{}, opt, c.pts.size(), c.pts.xyz.data(), leaf);
+    const auto it = seen.find(std::make_pair(m.depth, m.cost));
+    if (it == seen.end()) return -1;
+    leaf_seen = it->second;
+  }
+  for (std::size_t i = 0; i < cands.size(); ++i)
+    if (cands[i].grid == grid && (grid > 0 || cands[i].leaf == leaf_seen)) return (int) i;
+  return -1;
+}
+
+// the tuned tree, as kspace_style kifmm tunes it: a walk along the trees near the automatic
+// one, each timed on real evaluations (kifmm::TreeTuner); the trees timed on stderr
+kifmm::TreeChoice tuned_tree(const Case &c, const kifmm::TreeRequest &request, const kifmm::Options &autom,
+                             int &evaluations)
+{
+  const std::size_t n = c.pts.size();
+  std::vector<double> pot(n), grad(3 * n);
+  kifmm::TreeTuner tuner(kifmm::KernelSpec{}, request, autom, n, c.pts.xyz.data());
+  std::unique_ptr<kifmm::Evaluator> ev = kifmm::make_evaluator(kifmm::KernelSpec{}, autom);
+  while (tuner.tuning()) {
+    tuner.select(ev);
+    const double t0 = cpu_now();
+    ev->evaluate(n, c.pts.xyz.data(), c.pts.q.data(), n, c.pts.xyz.data(), pot.data(), grad.data());
+    tuner.record(cpu_now() - t0 - ev->stats().t_precompute);
+  }
+  evaluations = tuner.evaluations();
+  for (const auto &t : tuner.timed())
+    std::fprintf(stderr, "%s %zu p%d tuning %s: modelled %.4g s, timed %.4g s (%d)\n", c.name.c_str(), n, autom.order,
+                 tree_label(t.tree.grid, t.tree.leaf_size).c_str(), t.tree.cost, t.least, t.evaluations);
+  return tuner.finish(ev);
+}
+
 void sweep(const Case &c, int order, bool periodic, int reps, double min_time, double factor, double min_leaf)
 {
   const std::size_t n = c.pts.size();
-  const kifmm::KernelSpec kernel;
   kifmm::Options opt;
   opt.order = order;
   if (periodic) {
@@ -99,89 +156,41 @@ void sweep(const Case &c, int order, bool periodic, int reps, double min_time, d
   // the automatic tree, as kspace_style kifmm takes it on one rank
   const kifmm::TreeRequest request{n, 0, periodic ? -1 : 0, false};
   kifmm::Options autom = kifmm::plan_tree(opt, request).options;
-  const kifmm::TreeChoice choice = kifmm::choose_tree_from_points(kernel, request, autom, n, c.pts.xyz.data());
-  // the sweep: distinct trees only (same depth and modelled cost = same tree)
-  std::vector<Candidate> cands;
+  const kifmm::TreeChoice choice = kifmm::choose_tree_from_points(kifmm::KernelSpec{}, request, autom, n, c.pts.xyz.data());
   std::map<std::pair<int, double>, int> seen;
-  for (double leaf = 8; leaf <= 8192 && leaf <= 2.0 * n; leaf *= factor) {
-    if (leaf < min_leaf) continue;
-    const int l = (int) std::lround(leaf);
-    kifmm::Options o = opt;
-    o.leaf_size = l;
-    const kifmm::TreeChoice m = kifmm::model_tree(kernel, o, n, c.pts.xyz.data(), l);
-    if (!seen.emplace(std::make_pair(m.depth, m.cost), l).second) continue;
-    cands.push_back(Candidate{l, m.depth, {}});
-  }
-  // periodic: every single-level grid within the engine's memory bound, at every order, with
-  // at least 2 points per cell on average
-  if (periodic)
-    for (int k = 3; k <= kifmm::max_grid_cells_long(order, nullptr) && (k == 3 || 2.0 * k * k * k <= n); ++k)
-      cands.push_back(Candidate{0, 1, {}, k});
-  // the automatic tree is the last candidate; when a swept leaf gives the same tree (same depth
-  // and modelled cost), auto / best uses that candidate's times (the same computation: the
-  // ratio of two timings of one tree only measures the noise)
+  std::vector<Candidate> cands = swept_trees(c, opt, factor, min_leaf, seen);
+  // the automatic tree is the last candidate; when a swept tree is the same tree, auto / best
+  // uses that candidate's times (the ratio of two timings of one tree only measures the noise)
   const int grid = autom.periodic_grid;
-  int same = -1;
-  if (grid == 0) {
-    const kifmm::TreeChoice m = kifmm::model_tree(kernel, autom, n, c.pts.xyz.data(), autom.leaf_size);
-    const auto it = seen.find(std::make_pair(m.depth, m.cost));
-    if (it != seen.end())
-      for (std::size_t i = 0; i < cands.size(); ++i)
-        if (cands[i].leaf == it->second && cands[i].grid == 0) same = (int) i;
+  const int same = grid == 0 ? same_swept(cands, seen, c, opt, autom.leaf_size, 0) : -1;
+  int tuning_evaluations = 0;
+  const kifmm::TreeChoice tuned = tuned_tree(c, request, autom, tuning_evaluations);
+  // the tuned tree's times: the automatic tree's, a swept tree's, or its own
+  int tuned_same = tuned.grid == grid && (grid > 0 || tuned.leaf_size == autom.leaf_size)
+                       ? (int) cands.size()
+                       : same_swept(cands, seen, c, opt, tuned.leaf_size, tuned.grid);
+  if (tuned_same < 0) {
+    cands.push_back(Candidate{tuned.leaf_size, tuned.depth, {}, tuned.grid});
+    tuned_same = (int) cands.size() - 1;
   }
   cands.push_back(Candidate{autom.leaf_size, choice.depth, {}});
-  std::vector<double> pot(n), grad(3 * n);
-  // the tuned tree, as kspace_style kifmm tunes it: a walk along the trees near the automatic
-  // one, each timed on one or two evaluations (kifmm::TreeTuner)
-  kifmm::TreeTuner tuner(kernel, request, autom, n, c.pts.xyz.data());
-  std::unique_ptr<kifmm::Evaluator> tuned_ev = kifmm::make_evaluator(kernel, autom);
-  while (tuner.tuning()) {
-    tuner.select(tuned_ev);
-    const double t0 = cpu_now();
-    tuned_ev->evaluate(n, c.pts.xyz.data(), c.pts.q.data(), n, c.pts.xyz.data(), pot.data(), grad.data());
-    tuner.record(cpu_now() - t0 - tuned_ev->stats().t_precompute);
-  }
-  const kifmm::TreeChoice tuned = tuner.finish(tuned_ev);
-  for (const auto &t : tuner.timed())    // the trees timed: modelled and least timed
-    std::fprintf(stderr, "%s %zu p%d tuning %s: modelled %.4g s, timed %.4g s (%d)\n", c.name.c_str(), n, order,
-                 tree_label(t.tree.grid, t.tree.leaf_size).c_str(), t.tree.cost, t.least, t.evaluations);
-  // the tuned tree's times: the automatic tree's, a swept tree's (same grid, or same depth and
-  // modelled cost), or its own
-  int tuned_same = -1;
-  if (tuned.grid == autom.periodic_grid && (tuned.grid > 0 || tuned.leaf_size == autom.leaf_size)) {
-    tuned_same = (int) cands.size() - 1;
-  } else if (tuned.grid > 0) {
-    for (std::size_t i = 0; i + 1 < cands.size(); ++i)
-      if (cands[i].grid == tuned.grid) tuned_same = (int) i;
-  } else {
-    const kifmm::TreeChoice tm = kifmm::model_tree(kernel, autom, n, c.pts.xyz.data(), tuned.leaf_size);
-    const auto it = seen.find(std::make_pair(tm.depth, tm.cost));
-    for (std::size_t i = 0; it != seen.end() && i + 1 < cands.size(); ++i)
-      if (cands[i].grid == 0 && cands[i].leaf == it->second) tuned_same = (int) i;
-  }
-  if (tuned_same < 0) {
-    cands.insert(cands.end() - 1, Candidate{tuned.leaf_size, tuned.depth, {}, tuned.grid});
-    tuned_same = (int) cands.size() - 2;
-  }
   std::vector<std::unique_ptr<kifmm::Evaluator>> evs;
-  for (std::size_t i = 0; i < cands.size(); ++i) {
-    kifmm::Options o = opt;
-    o.leaf_size = cands[i].leaf;
-    o.periodic_grid = cands[i].grid;
-    if (i + 1 == cands.size()) o = autom;
-    evs.push_back(kifmm::make_evaluator(kernel, o));
+  for (std::size_t i = 0; i < cands.size(); ++i)
+    evs.push_back(kifmm::make_evaluator(kifmm::KernelSpec{}, i + 1 == cands.size()
+                                                                 ? autom
+                                                                 : kifmm::tree_options(opt, kifmm::TreeChoice{cands[i].leaf, 0, 0.0, cands[i].grid})));
+  std::vector<double> pot(n), grad(3 * n);
+  for (std::size_t i = 0; i < evs.size(); ++i) {    // warm-up: operators, first-touch memory
+    evs[i]->evaluate(n, c.pts.xyz.data(), c.pts.q.data(), n, c.pts.xyz.data(), pot.data(), grad.data());
+    cands[i].depth = evs[i]->stats().depth;
   }
-  for (auto &ev : evs)    // warm-up: operators, first-touch memory
-    ev->evaluate(n, c.pts.xyz.data(), c.pts.q.data(), n, c.pts.xyz.data(), pot.data(), grad.data());
-  for (std::size_t i = 0; i + 1 < cands.size(); ++i) cands[i].depth = evs[i]->stats().depth;
-  cands.back().depth = evs.back()->stats().depth;
   const std::size_t m = cands.size();
   for (int r = 0; r < reps; ++r)
     for (std::size_t k = 0; k < m; ++k) {
       const std::size_t i = (k + r) % m;
       cands[i].times.push_back(time_evaluation(*evs[i], c.pts, pot, grad, min_time));
     }
-  // fastest swept tree by median; auto / best per round
+  // fastest swept tree by median; auto / best and tuned / best per round
   std::size_t best = 0;
   for (std::size_t i = 1; i + 1 < m; ++i)
     if (median(cands[i].times) < median(cands[best].times)) best = i;
@@ -198,7 +207,7 @@ void sweep(const Case &c, int order, bool periodic, int reps, double min_time, d
               c.name.c_str(), n, order,
               (tree_label(grid, a.leaf) + (same >= 0 ? " (= " + std::to_string(cands[same].leaf) + ")" : "")).c_str(),
               tuned_label.c_str(), tree_label(b.grid, b.leaf).c_str(), a.depth, t.depth, b.depth,
-              median(tuned_times), median(b.times), median(ratio), median(tuned_ratio), m - 1, tuner.evaluations());
+              median(tuned_times), median(b.times), median(ratio), median(tuned_ratio), m - 1, tuning_evaluations);
   std::fflush(stdout);
 }
 

@@ -61,7 +61,8 @@ std::string shared_name(const std::string &name)
   return dir + "/" + name;
 }
 
-// styles that restart files do not keep (re-specified after read_restart)
+// styles that restart files do not keep (re-specified after read_restart); tune no: the runs
+// are compared bit for bit, so the modelled tree, not a timed one
 const char *const FORCES = R"(
 neigh_modify every 1 delay 0 check no
 fix wall all wall/gran hooke 200.0 NULL 0.0 NULL 0.5 1 zplane -0.05 NULL
@@ -69,6 +70,7 @@ fix ef all efield 2.0e-3 0.0 -1.0e-3
 fix grav nothing gravity 9.81 vector 0 0 -1
 dielectric 1.0e14
 kspace_style kifmm 1e-6
+kspace_modify kifmm tune no
 fix st all kifmm/stride 5
 thermo_style custom step
 )";

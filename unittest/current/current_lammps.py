@@ -206,6 +206,7 @@ timestep 1e-4
 group nothing empty
 fix grav nothing gravity 9.81 vector 0 0 -1
 kspace_style kifmm 1e-6
+kspace_modify kifmm tune no
 fix st all kifmm/stride 5
 thermo_style custom step
 """

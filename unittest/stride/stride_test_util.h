@@ -30,6 +30,7 @@ inline std::string charged_cube(const std::string &pair = "pair_style zero 1.0\n
       velocity + "\n" + pair +
       "\n"
       "kspace_style kifmm 1e-6\n"
+      "kspace_modify kifmm tune no\n"    // runs are compared bit for bit: the modelled tree, not a timed one
       "fix nve all nve\n"
       "timestep 0.002\n"
       "thermo_style custom step pe ke etotal elong\n"

@@ -212,7 +212,7 @@ TEST_P(Restart, SplitRunContinuesTheScheduleExactly)
   auto restarted = [&](const std::string &fixline) {
     create();
     commands("read_restart " + file + "\n" + soft +
-             "\nkspace_style kifmm 1e-6\nfix nve all nve\nthermo_modify norm no\n"
+             "\nkspace_style kifmm 1e-6\nkspace_modify kifmm tune no\nfix nve all nve\nthermo_modify norm no\n"
              "atom_modify sort 0 0.0\n" + fixline +
              "\nrun 17 post no");
     return positions_by_id();

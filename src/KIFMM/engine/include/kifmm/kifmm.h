@@ -347,10 +347,11 @@ TreeChoice choose_tree_from_points(const KernelSpec &kernel, const TreeRequest &
 // the tree in use (options: its leaf size and grid) and walks its ladder towards the faster
 // neighbour until both neighbours of the fastest are slower; then the same on the other ladder
 // from its tree of least modelled cost, when that is within kTuneOtherLadder of the tree in
-// use's modelled cost. Each tree is timed on two evaluations or more, until they add up to
-// kTuneMinSeconds (at most kTuneRepeats; the least counts, as the least disturbed by other
-// work on the machine; one when the first already takes kTuneSlower times the fastest so
-// far), at most kTuneTrees trees; the tree in
+// use's modelled cost. Each tree is timed after one evaluation that warms it up (first-touch
+// memory; not timed) on two evaluations or more, until they add up to kTuneMinSeconds (at
+// most kTuneRepeats; the least counts, as the least disturbed by other work on the machine;
+// one when it already takes kTuneSlower times the fastest so far), at most kTuneTrees trees;
+// the tree in
 // use is kept unless another is faster by kTuneMargin. A given leaf size or grid (request) is
 // not tuned.
 //
@@ -378,7 +379,7 @@ class TreeTuner {
     TreeChoice tree;
     double least = 0;    // least time of its evaluations (s)
     double total = 0;    // their sum (s)
-    int evaluations = 0;
+    int evaluations = 0;    // the first one not timed (warm-up)
     bool rejected = false;    // its accuracy fell short (reject)
   };
   TreeTuner() = default;

@@ -20,7 +20,7 @@ bool same_octree(const TreeChoice &a, const TreeChoice &b)
 // either side of the leaf size in use, in steps of sqrt(2) (the same tree is skipped: larger leaves
 // often give the same tree up to the occupancy of the next level's cells); else (xyz null) the
 // full trees over n uniform points, depths log8 n .. 0
-constexpr int kLadderSide = 3;
+constexpr int kLadderSide = 4;
 std::vector<TreeChoice> octree_ladder(const KernelSpec &kernel, const Options &o, std::size_t n, const double *xyz)
 {
   std::vector<TreeChoice> out;
@@ -163,7 +163,8 @@ void TreeTuner::reject(std::unique_ptr<Evaluator> &ev)
   next_tree();
 }
 
-// the untimed neighbour of the ladder's fastest tree, if any
+// the untimed neighbour of the ladder's fastest tree, or of a tree within kTuneFlat of it (a
+// flat stretch of the ladder, where the timings' noise would stop the walk short), if any
 bool TreeTuner::walk(int ladder)
 {
   std::vector<Rung> &rungs = ladders_[ladder];
@@ -172,11 +173,15 @@ bool TreeTuner::walk(int ladder)
     if (rungs[r].timed >= 0 && (best < 0 || timed_[rungs[r].timed].least < timed_[rungs[best].timed].least))
       best = (long) r;
   if (best < 0 || timed_[rungs[best].timed].rejected) return false;
-  for (long nb : {best - 1, best + 1})
-    if (nb >= 0 && nb < (long) rungs.size() && rungs[nb].timed < 0) {
-      start(ladder, (std::size_t) nb);
-      return true;
-    }
+  const double flat = (1 + kTuneFlat) * timed_[rungs[best].timed].least;
+  for (long r = 0; r < (long) rungs.size(); ++r) {
+    if (r != best && (rungs[r].timed < 0 || !(timed_[rungs[r].timed].least <= flat))) continue;
+    for (long nb : {r - 1, r + 1})
+      if (nb >= 0 && nb < (long) rungs.size() && rungs[nb].timed < 0) {
+        start(ladder, (std::size_t) nb);
+        return true;
+      }
+  }
   return false;
 }
 

@@ -338,14 +338,15 @@ TreeChoice choose_tree_from_points(const KernelSpec &kernel, const TreeRequest &
 // Tuning times trees near it on real evaluations (their results are used: every tree has the
 // same order) and keeps the fastest.
 //
-// Two ladders of trees: octrees of leaf sizes 2^(j/2) times the one in use (j = -4 .. 4,
-// distinct trees only: same depth and modelled cost is the same tree) and, when the grid is
+// Two ladders of trees: octrees of leaf sizes 2^(j/2) times the one in use (up to 4 distinct
+// trees on either side: same depth and modelled cost is the same tree) and, when the grid is
 // chosen with the tree (request.grid < 0, periodic), the single-level grids choose_tree offers,
 // by cells per side. Modelled on these points (xyz: one process holds all of them) or, when
 // xyz is null (the distributed evaluation: each rank holds its own points), on n uniformly
 // spread points (octrees of depths 0 .. log8 n): the same on every rank. The search starts at
 // the tree in use (options: its leaf size and grid) and walks its ladder towards the faster
-// neighbour until both neighbours of the fastest are slower; then the same on the other ladder
+// neighbour until both neighbours of the fastest are slower, and of every tree within kTuneFlat
+// of the fastest (a flat stretch, where noise would stop the walk); then the same on the other ladder
 // from its tree of least modelled cost, when that is within kTuneOtherLadder of the tree in
 // use's modelled cost. Each tree is timed after one evaluation that warms it up (first-touch
 // memory; not timed) on two evaluations or more, until they add up to kTuneMinSeconds (at
@@ -373,6 +374,7 @@ constexpr int kTuneTrees = 12;
 constexpr double kTuneMinSeconds = 0.05;
 constexpr int kTuneRepeats = 8;
 constexpr double kTuneMargin = 0.03;
+constexpr double kTuneFlat = 0.02;
 class TreeTuner {
  public:
   struct Timed {

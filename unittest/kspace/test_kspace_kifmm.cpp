@@ -76,6 +76,16 @@ class KSpaceKifmm : public LammpsFixture {
   }
 };
 
+// two dense clusters of n1 atoms (seed s1) and n2 uniformly spread atoms (seed s2)
+Configuration clusters_and_uniform(int n1, unsigned s1, int n2, unsigned s2)
+{
+  Configuration c = two_clusters(n1, s1);
+  Configuration u = uniform_cube(n2, s2);
+  c.x.insert(c.x.end(), u.x.begin(), u.x.end());
+  c.q.insert(c.q.end(), u.q.begin(), u.q.end());
+  return c;
+}
+
 double rel(double a, double b)
 {
   return std::fabs(a - b) / std::fabs(b);
@@ -626,11 +636,7 @@ std::vector<double> per_atom_by_id(LAMMPS_NS::LAMMPS *lmp, const char *id, int c
 
 TEST_F(KSpaceKifmm, MpiDistributedPerAtomValuesEqualPairCoulCut)
 {
-  Configuration c = two_clusters(600, 9);
-  Configuration u = uniform_cube(900, 10);
-  c.x.insert(c.x.end(), u.x.begin(), u.x.end());
-  c.q.insert(c.q.end(), u.q.begin(), u.q.end());
-  load(c);
+  load(clusters_and_uniform(600, 9, 900, 10));
   const std::string computes =
       "compute pea all pe/atom\ncompute sa all stress/atom NULL\ncompute p all pressure NULL virial\n";
   commands(computes);
@@ -651,11 +657,7 @@ TEST_F(KSpaceKifmm, MpiDistributedPerAtomValuesEqualPairCoulCut)
 
 TEST_F(KSpaceKifmm, MpiDistributedCheckMeasuresTheFullError)
 {
-  Configuration c = two_clusters(1000, 11);
-  Configuration u = uniform_cube(1000, 12);
-  c.x.insert(c.x.end(), u.x.begin(), u.x.end());
-  c.q.insert(c.q.end(), u.q.begin(), u.q.end());
-  load(c);
+  load(clusters_and_uniform(1000, 11, 1000, 12));
   Result ref = exact();
   Result r = kifmm("1e-4", "order 4 leaf 32 check 1 2000");
   const double full = relative_force_error(r.f, ref.f), measured = evaluate("v_kifmm_error");
@@ -669,11 +671,7 @@ TEST_F(KSpaceKifmm, MpiDistributedCheckMeasuresTheFullError)
 // trees are modelled on uniformly spread atoms. tune no: no tuning.
 TEST_F(KSpaceKifmm, MpiDistributedTreeTuningKeepsTheAccuracy)
 {
-  Configuration c = two_clusters(1500, 13);
-  Configuration u = uniform_cube(1500, 14);
-  c.x.insert(c.x.end(), u.x.begin(), u.x.end());
-  c.q.insert(c.q.end(), u.q.begin(), u.q.end());
-  load(c);
+  load(clusters_and_uniform(1500, 13, 1500, 14));
   Result ref = exact();
   commands("pair_style zero 0.01\npair_coeff * *\nkspace_style kifmm 1e-5\nkspace_modify kifmm check 1 3000");
   const std::string out = captured("run 100 post no");

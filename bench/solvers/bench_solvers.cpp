@@ -474,14 +474,17 @@ int cmd_run(const Args &a)
     c_setup = cpu() - c0;
     Atom *atom = lmp->atom;
     Force *force = lmp->force;
+    auto zero_forces = [&] {
+      const int nall = atom->nlocal + (force->newton ? atom->nghost : 0);
+      for (int i = 0; i < nall; ++i) atom->f[i][0] = atom->f[i][1] = atom->f[i][2] = 0.0;
+    };
     // kifmm's tree tuning (tune yes): the evaluations that time the trees near the modelled
     // choice come first, so that the timed ones are those of the rest of a run (reported as
     // tune_evaluations and t_tune)
     if (auto *kk = dynamic_cast<KSpaceKIFMM *>(force->kspace)) {
       const double tt = wall();
-      while (kk->tuning() && tune_evaluations < 40) {
-        for (int i = 0; i < atom->nlocal + (force->newton ? atom->nghost : 0); ++i)
-          atom->f[i][0] = atom->f[i][1] = atom->f[i][2] = 0.0;
+      while (kk->tuning() && tune_evaluations < (1 + kifmm::kTuneRepeats) * kifmm::kTuneTrees) {
+        zero_forces();
         force->kspace->compute(0, 0);
         ++tune_evaluations;
       }
@@ -489,9 +492,8 @@ int cmd_run(const Args &a)
     }
     const double t_start = wall();
     for (int r = 0; r < 1000; ++r) {
-      const int nall = atom->nlocal + (force->newton ? atom->nghost : 0);
       double tb = wall(), cb = cpu();
-      for (int i = 0; i < nall; ++i) atom->f[i][0] = atom->f[i][1] = atom->f[i][2] = 0.0;
+      zero_forces();
       double tp = wall(), cp = cpu();
       if (force->pair) force->pair->compute(0, 0);
       double tk = wall(), ck = cpu();

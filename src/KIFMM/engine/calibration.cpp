@@ -463,18 +463,54 @@ bool grid_fits_cell(int order, int k, const double shape[3], bool open_z)
   return grid_cell_aspect(kd, shape) <= max_grid_cell_aspect * (1 + 1e-12);
 }
 
+namespace {
+// The grids of model_grids (kifmm.h): occupancies of these wrapped points (xyz) or, when xyz is
+// null, of n uniformly spread points
+std::vector<TreeChoice> grids_of(const Options &o, std::size_t n, const double *xyz, bool octree_alternative)
+{
+  std::vector<TreeChoice> out;
+  if (!o.periodic || (octree_alternative && max_grid_cells(o.order) == 0)) return out;    // fitted orders only
+  const bool open_z = o.periodic_dims == 2;
+  const double *shape = o.fixed_root ? o.root_shape : nullptr;
+  const double *sh = shape && !(shape[0] == 1.0 && shape[1] == 1.0 && shape[2] == 1.0) ? shape : nullptr;
+  for (int k = 3; k <= max_grid_cells_long(o.order, sh); ++k) {
+    const TreeCounts u = uniform_grid_counts(n, k, sh, open_z);
+    if (octree_alternative && u.cells > (double) n) break;
+    if (!grid_fits_cell(o.order, k, sh, open_z)) continue;
+    const TreeCounts c = xyz ? grid_counts(n, xyz, o.root_center, o.root_half_width, k, sh, open_z) : u;
+    out.push_back(TreeChoice{o.leaf_size, 0, modelled_grid_cost(o.order, n, c, o.near_pair_weight), k});
+  }
+  return out;
+}
+
+// the first grid of least cost (grid 0, this leaf size: none)
+TreeChoice cheapest_grid(const std::vector<TreeChoice> &grids, int leaf)
+{
+  TreeChoice g{leaf, 0, 0.0, 0};
+  for (const TreeChoice &c : grids)
+    if (g.grid == 0 || c.cost < g.cost) g = TreeChoice{leaf, 0, c.cost, c.grid};
+  return g;
+}
+
+// options of the uniform choices' grids: a periodic cell of this shape (null: a cube)
+Options uniform_grid_options(int order, int leaf, const double *shape, bool open_z, double w)
+{
+  Options o;
+  o.order = order;
+  o.leaf_size = leaf;
+  o.periodic = true;
+  o.fixed_root = true;
+  o.periodic_dims = open_z ? 2 : 3;
+  o.near_pair_weight = w;
+  for (int d = 0; shape && d < 3; ++d) o.root_shape[d] = shape[d];
+  return o;
+}
+}    // namespace
+
 TreeChoice choose_slab_grid(int order, std::size_t n, const double shape[3])
 {
-  TreeChoice g{choose_tree(order, n, false).leaf_size, 0, 0.0, 0};
-  for (int k = 3; k <= max_grid_cells_long(order, shape); ++k) {
-    if (!grid_fits_cell(order, k, shape, true)) continue;
-    const double c = modelled_grid_cost(order, n, uniform_grid_counts(n, k, shape, true));
-    if (g.grid == 0 || c < g.cost) {
-      g.cost = c;
-      g.grid = k;
-    }
-  }
-  return g;
+  const int leaf = choose_tree(order, n, false).leaf_size;
+  return cheapest_grid(grids_of(uniform_grid_options(order, leaf, shape, true, 1.0), n, nullptr, false), leaf);
 }
 
 TreeChoice choose_tree(int order, std::size_t n, bool periodic, bool grid, const double *shape, double w)
@@ -483,16 +519,8 @@ TreeChoice choose_tree(int order, std::size_t n, bool periodic, bool grid, const
   if (cube) shape = nullptr;
   // a periodic cell the octree does not fit: the grid of least modelled cost whose cells do
   if (periodic && shape && !octree_fits_cell(shape)) {
-    TreeChoice g{choose_tree(order, n, false, false, nullptr, w).leaf_size, 0, 0.0, 0};
-    for (int k = 3; k <= max_grid_cells_long(order, shape); ++k) {
-      if (!grid_fits_cell(order, k, shape)) continue;
-      const double c = modelled_grid_cost(order, n, uniform_grid_counts(n, k, shape), w);
-      if (g.grid == 0 || c < g.cost) {
-        g.cost = c;
-        g.grid = k;
-      }
-    }
-    return g;
+    const int leaf = choose_tree(order, n, false, false, nullptr, w).leaf_size;
+    return cheapest_grid(grids_of(uniform_grid_options(order, leaf, shape, false, w), n, nullptr, false), leaf);
   }
   TreeChoice best{leaf_size_for_depth(n, 0), 0, modelled_cost(order, n, periodic, 0, w)};
   // depths with at least one point per leaf on average
@@ -505,16 +533,9 @@ TreeChoice choose_tree(int order, std::size_t n, bool periodic, bool grid, const
   // same on several ranks, where every rank repeats the transforms of all cells and the
   // convolution: a model that charged that work per rank picked worse grids and, on 4 ranks at
   // order 8, the octree at 2.0 open evaluations where the grid measured 1.6; bench_scaling)
-  TreeChoice g = best;
-  const int kmax = max_grid_cells(order) == 0 ? 0 : max_grid_cells_long(order, shape);    // fitted orders only
-  for (int k = 3; k <= kmax && uniform_grid_counts(n, k, shape).cells <= (double) n; ++k) {
-    if (shape && !grid_fits_cell(order, k, shape)) continue;
-    const double c = modelled_grid_cost(order, n, uniform_grid_counts(n, k, shape), w);
-    if (g.grid == 0 || c < g.cost) {
-      g.cost = c;
-      g.grid = k;
-    }
-  }
+  TreeChoice g = cheapest_grid(grids_of(uniform_grid_options(order, best.leaf_size, shape, false, w), n, nullptr, true),
+                               best.leaf_size);
+  g.depth = best.depth;
   return g.grid != 0 && (1 - kChoiceMargin) * g.cost <= best.cost ? g : best;
 }
 
@@ -558,23 +579,10 @@ TreeChoice model_leaf(const ChoicePoints &pts, const Options &o, std::size_t n, 
 }
 
 // The periodic single-level grid of least modelled cost on the actual cell occupancies, among
-// those whose cells fit the cell of the options (open_z: a slab); leaf: the choice's leaf size.
-TreeChoice grid_on_points(const KernelSpec &kernel, const Options &o, std::size_t n, const double *xyz, int leaf,
-                          bool open_z)
+// those whose cells fit the cell of the options (a slab: open along z); leaf: the choice's leaf size.
+TreeChoice grid_on_points(const KernelSpec &kernel, const Options &o, std::size_t n, const double *xyz, int leaf)
 {
-  const ChoicePoints pts(kernel, o, n, xyz);
-  TreeChoice g{leaf, 0, 0.0, 0};
-  for (int k = 3; k <= max_grid_cells_long(o.order, o.root_shape); ++k) {
-    if (!grid_fits_cell(o.order, k, o.root_shape, open_z)) continue;
-    const double c = modelled_grid_cost(
-        o.order, n, grid_counts(n, pts.xyz, o.root_center, o.root_half_width, k, o.root_shape, open_z),
-        o.near_pair_weight);
-    if (g.grid == 0 || c < g.cost) {
-      g.cost = c;
-      g.grid = k;
-    }
-  }
-  return g;
+  return cheapest_grid(model_grids(kernel, o, n, xyz, false), leaf);
 }
 }    // namespace
 
@@ -593,15 +601,12 @@ TreeChoice model_tree(const KernelSpec &kernel, const Options &options, std::siz
   return model_leaf(pts, options, n, std::max(1, leaf_size));
 }
 
-TreeChoice model_grid(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz, int k)
+std::vector<TreeChoice> model_grids(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz,
+                                    bool octree_alternative)
 {
-  const bool open_z = options.periodic_dims == 2;
+  if (!xyz || n == 0) return grids_of(options, n, nullptr, octree_alternative);
   const ChoicePoints pts(kernel, options, n, xyz);
-  const double *sh = pts.root.cubic() ? nullptr : options.root_shape;
-  if (!options.periodic || !grid_fits_cell(options.order, k, sh, open_z)) return TreeChoice{options.leaf_size, 0, -1.0, 0};
-  const TreeCounts c = n == 0 ? uniform_grid_counts(0, k, sh, open_z)
-                              : grid_counts(n, pts.xyz, options.root_center, options.root_half_width, k, sh, open_z);
-  return TreeChoice{options.leaf_size, 0, modelled_grid_cost(options.order, n, c, options.near_pair_weight), k};
+  return grids_of(options, n, pts.xyz, octree_alternative);
 }
 
 TreeChoice choose_tree(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz)
@@ -610,13 +615,12 @@ TreeChoice choose_tree(const KernelSpec &kernel, const Options &options, std::si
     // a slab: only grids (heaped atoms fill few cells densely: more cells than for uniform
     // points of the same number)
     const TreeChoice uniform = choose_slab_grid(options.order, n, options.root_shape);
-    return n == 0 ? uniform : grid_on_points(kernel, options, n, xyz, uniform.leaf_size, true);
+    return n == 0 ? uniform : grid_on_points(kernel, options, n, xyz, uniform.leaf_size);
   }
   const double *shape = options.fixed_root ? options.root_shape : nullptr;
   if (options.periodic && shape && !octree_fits_cell(shape))    // only grids
     return grid_on_points(kernel, options, n, xyz,
-                          choose_tree(options.order, n, false, false, nullptr, options.near_pair_weight).leaf_size,
-                          false);
+                          choose_tree(options.order, n, false, false, nullptr, options.near_pair_weight).leaf_size);
   const TreeChoice uniform = choose_tree(options.order, n, options.periodic, false, nullptr, options.near_pair_weight);
   if (n == 0) return uniform;
   // candidates, largest first: leaf sizes not below the uniform choice's (the uniform depths
@@ -656,19 +660,8 @@ TreeChoice choose_tree(const KernelSpec &kernel, const Options &options, std::si
   // 3e3 atoms, order 6, depth 2: modelled 0.0056 s, measured 0.0081 s, where the grid of 4^3
   // cells is modelled 0.0057 s and measured 0.0047-0.0053 s; bench_periodic)
   if (options.periodic) {
-    const double *sh = pts.root.cubic() ? nullptr : options.root_shape;
-    TreeChoice grid{tree.leaf_size, tree.depth, 0.0, 0};
-    const int kmax = max_grid_cells(options.order) == 0 ? 0 : max_grid_cells_long(options.order, sh);
-    for (int k = 3; k <= kmax && uniform_grid_counts(n, k, sh).cells <= (double) n; ++k) {
-      if (sh && !grid_fits_cell(options.order, k, sh)) continue;
-      const double c = modelled_grid_cost(
-          options.order, n, grid_counts(n, pts.xyz, options.root_center, options.root_half_width, k, sh),
-          options.near_pair_weight);
-      if (grid.grid == 0 || c < grid.cost) {
-        grid.cost = c;
-        grid.grid = k;
-      }
-    }
+    TreeChoice grid = cheapest_grid(grids_of(options, n, pts.xyz, true), tree.leaf_size);
+    grid.depth = tree.depth;
     if (grid.grid != 0 && (1 - kChoiceMargin) * grid.cost <= tree.cost) return grid;
   }
   return tree;

@@ -48,27 +48,6 @@ std::vector<TreeChoice> octree_ladder(const KernelSpec &kernel, const Options &o
   return out;
 }
 
-// the single-level grids choose_tree offers, by cells per side (in cells the octree fits: at
-// the orders whose grid cost is fitted, at most one cell per point)
-std::vector<TreeChoice> grid_ladder(const KernelSpec &kernel, const Options &o, std::size_t n, const double *xyz,
-                                    bool octree)
-{
-  std::vector<TreeChoice> out;
-  const bool open_z = o.periodic_dims == 2;
-  const double *shape = o.fixed_root ? o.root_shape : nullptr;
-  const double *sh = shape && !(shape[0] == 1.0 && shape[1] == 1.0 && shape[2] == 1.0) ? shape : nullptr;
-  if (octree && max_grid_cells(o.order) == 0) return out;
-  for (int k = 3; k <= max_grid_cells_long(o.order, sh); ++k) {
-    if (!grid_fits_cell(o.order, k, sh, open_z)) continue;
-    const TreeCounts u = uniform_grid_counts(n, k, sh, open_z);
-    if (octree && u.cells > (double) n) break;
-    TreeChoice g = xyz ? model_grid(kernel, o, n, xyz, k)
-                       : TreeChoice{0, 0, modelled_grid_cost(o.order, n, u, o.near_pair_weight), k};
-    g.leaf_size = o.leaf_size;    // kept with the grid (the distributed evaluation's octree)
-    out.push_back(g);
-  }
-  return out;
-}
 }    // namespace
 
 Options tree_options(const Options &options, const TreeChoice &tree)
@@ -87,13 +66,10 @@ TreeTuner::TreeTuner(const KernelSpec &kernel, const TreeRequest &request, const
   const double *shape = options.fixed_root ? options.root_shape : nullptr;
   const bool octree = !slab && !(options.periodic && shape && !octree_fits_cell(shape));
   if (n == 0 || request.grid > 0 || (request.leaf_size > 0 && !slab)) return;    // given: not tuned
-  if (octree) ladders_[0] = [&] {
-    std::vector<Rung> r;
-    for (const TreeChoice &t : octree_ladder(kernel, options, n, xyz)) r.push_back(Rung{t});
-    return r;
-  }();
+  if (octree)
+    for (const TreeChoice &t : octree_ladder(kernel, options, n, xyz)) ladders_[0].push_back(Rung{t});
   if (options.periodic && request.grid < 0)
-    for (const TreeChoice &t : grid_ladder(kernel, options, n, xyz, octree)) ladders_[1].push_back(Rung{t});
+    for (const TreeChoice &t : model_grids(kernel, options, n, xyz, octree)) ladders_[1].push_back(Rung{t});
   // the tree in use starts the walk
   const int first = options.periodic_grid > 0 ? 1 : 0;
   std::size_t at = ladders_[first].size();
@@ -122,13 +98,17 @@ void TreeTuner::start(int ladder, std::size_t rung)
   timed_.push_back(Timed{ladders_[ladder][rung].tree, std::numeric_limits<double>::infinity(), 0});
 }
 
+// ev becomes the evaluator of timed tree i
+void TreeTuner::use(std::unique_ptr<Evaluator> &ev, std::size_t i)
+{
+  if (i == in_use_) return;
+  ev = make_evaluator(kernel_, tree_options(options_, timed_[i].tree));
+  in_use_ = i;
+}
+
 void TreeTuner::select(std::unique_ptr<Evaluator> &ev)
 {
-  if (!tuning()) return;
-  const std::size_t next = (std::size_t) ladders_[ladder_][rung_].timed;
-  if (next == in_use_) return;
-  ev = make_evaluator(kernel_, tree_options(options_, timed_[next].tree));
-  in_use_ = next;
+  if (tuning()) use(ev, (std::size_t) ladders_[ladder_][rung_].timed);
 }
 
 void TreeTuner::record(double seconds)
@@ -156,10 +136,8 @@ void TreeTuner::reject(std::unique_ptr<Evaluator> &ev)
   ++evaluations_;
   Timed &t = timed_[in_use_];
   t.rejected = true;
-  t.least = std::numeric_limits<double>::infinity();
-  ++t.evaluations;
-  ev = make_evaluator(kernel_, tree_options(options_, timed_[0].tree));
-  in_use_ = 0;
+  ++t.evaluations;    // its least time stays infinite: never the fastest
+  use(ev, 0);
   next_tree();
 }
 
@@ -201,16 +179,12 @@ void TreeTuner::next_tree()
 TreeChoice TreeTuner::finish(std::unique_ptr<Evaluator> &ev)
 {
   done_ = true;
-  if (timed_.empty()) return ev ? TreeChoice{ev->options().leaf_size, 0, 0.0, ev->options().periodic_grid}
-                                : TreeChoice{options_.leaf_size, 0, 0.0, options_.periodic_grid};
+  if (timed_.empty()) return TreeChoice{options_.leaf_size, 0, 0.0, options_.periodic_grid};    // not tuned
   std::size_t best = (std::size_t) (std::min_element(timed_.begin(), timed_.end(),
                                                      [](const Timed &a, const Timed &b) { return a.least < b.least; }) -
                                     timed_.begin());
   if (timed_[best].least > (1 - kTuneMargin) * timed_[0].least) best = 0;    // the tree in use at the start
-  if (best != in_use_) {
-    ev = make_evaluator(kernel_, tree_options(options_, timed_[best].tree));
-    in_use_ = best;
-  }
+  use(ev, best);
   return timed_[best].tree;
 }
 

@@ -299,10 +299,14 @@ TreeChoice choose_tree(const KernelSpec &kernel, const Options &options, std::si
 TreeChoice model_tree(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz,
                       int leaf_size);
 
-// Modelled cost of the periodic single-level grid of k cells along the longest axis
-// (Options::periodic_grid = k) over these points (actual cell occupancies, as above); cost < 0
-// when its cells do not fit the periodic cell (grid_fits_cell) or the options are not periodic.
-TreeChoice model_grid(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz, int k);
+// The periodic single-level grids the choices above offer, modelled (TreeChoice::grid = k cells
+// along the longest axis, leaf_size = options.leaf_size), by ascending k: every k >= 3 whose
+// cells fit the periodic cell (grid_fits_cell; a slab, periodic_dims 2: open along z) and, where
+// the octree is the alternative (octree_alternative), only at the orders whose grid cost is
+// fitted and with at most one cell per point; on the actual cell occupancies of these points or,
+// xyz null, on n uniformly spread points. None when the options are not periodic.
+std::vector<TreeChoice> model_grids(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz,
+                                    bool octree_alternative);
 
 // The tree of an N-body evaluation, from what the caller asks for (tree_plan.cpp; what
 // kspace_style kifmm uses). A given leaf size is used as is. Otherwise the uniform choice above
@@ -403,6 +407,7 @@ class TreeTuner {
   };
   void next_tree();
   bool walk(int ladder);
+  void use(std::unique_ptr<Evaluator> &ev, std::size_t i);
   void start(int ladder, std::size_t rung);
   KernelSpec kernel_;
   Options options_;

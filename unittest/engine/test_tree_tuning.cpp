@@ -1,8 +1,9 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Tuning the tree by timing (kifmm::TreeTuner): the walk along the ladders of octrees and
-// single-level grids on given times (it reaches the fastest tree, keeps the tree in use within
-// the margin, tunes nothing that was given), and real evaluations during tuning, whose results
-// must all be as accurate as the modelled choice's (open: direct sum; periodic: Ewald).
+// single-level grids on given times (it reaches the fastest tree, also across a bump within the
+// flat tolerance, keeps the tree in use within the margin, tunes nothing that was given), and
+// real evaluations during tuning, whose results must all be as accurate as the modelled
+// choice's (open: direct sum; periodic: Ewald).
 #include "cost_model.h"
 #include "periodic.h"
 #include "test_util.h"
@@ -70,6 +71,26 @@ TEST(TreeTuning, WalksTheOctreeLadderToTheFastestTree)
     EXPECT_EQ(t.depth, target);
     EXPECT_EQ(t.leaf_size, kifmm::leaf_size_for_depth(n, target));
   }
+}
+
+TEST(TreeTuning, CrossesABumpWithinTheFlatTolerance)
+{
+  // times 1 at the tree in use, slightly more (within kTuneFlat) one depth up, least two depths
+  // up: a walk that stopped where both neighbours of the fastest are slower would miss it
+  const std::size_t n = 2000000;
+  const kifmm::Options start = uniform_start(n, false, 6, 0);
+  const int d0 = kifmm::choose_tree(6, n, false).depth;
+  ASSERT_GE(d0, 3);
+  kifmm::TreeTuner tuner(KernelSpec{}, kifmm::TreeRequest{n, 0, 0, true}, start, n, nullptr);
+  ASSERT_TRUE(tuner.tuning());
+  const kifmm::TreeChoice t = tune_on(tuner, start, [&](const kifmm::Options &o) {
+    int d = 0;
+    while (kifmm::leaf_size_for_depth(n, d) != o.leaf_size && d < 20) ++d;
+    if (d == d0 - 1) return 1.0 + 0.8 * kifmm::kTuneFlat;
+    if (d == d0 - 2) return 0.85;
+    return d == d0 ? 1.0 : 1.3;
+  });
+  EXPECT_EQ(t.depth, d0 - 2);
 }
 
 TEST(TreeTuning, SearchesTheGridsFromTheirModelledBest)

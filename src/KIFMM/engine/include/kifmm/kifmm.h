@@ -378,7 +378,7 @@ constexpr int kTuneTrees = 12;
 constexpr double kTuneMinSeconds = 0.05;
 constexpr int kTuneRepeats = 8;
 constexpr double kTuneMargin = 0.03;
-constexpr double kTuneFlat = 0.02;
+constexpr double kTuneFlat = 0.05;
 class TreeTuner {
  public:
   struct Timed {

@@ -350,15 +350,14 @@ TreeChoice choose_tree_from_points(const KernelSpec &kernel, const TreeRequest &
 // spread points (octrees of depths 0 .. log8 n): the same on every rank. The search starts at
 // the tree in use (options: its leaf size and grid) and walks its ladder towards the faster
 // neighbour until both neighbours of the fastest are slower, and of every tree within kTuneFlat
-// of the fastest (a flat stretch, where noise would stop the walk); then the same on the other ladder
-// from its tree of least modelled cost, when that is within kTuneOtherLadder of the tree in
-// use's modelled cost. Each tree is timed after one evaluation that warms it up (first-touch
-// memory; not timed) on two evaluations or more, until they add up to kTuneMinSeconds (at
-// most kTuneRepeats; the least counts, as the least disturbed by other work on the machine;
-// one when it already takes kTuneSlower times the fastest so far), at most kTuneTrees trees;
-// the tree in
-// use is kept unless another is faster by kTuneMargin. A given leaf size or grid (request) is
-// not tuned.
+// of the fastest (flat stretches and bumps of a few per cent, where noise would stop the walk);
+// then the same on the other ladder from its tree of least modelled cost, when that is within
+// kTuneOtherLadder of the tree in use's modelled cost. Each tree is timed after one evaluation
+// that warms it up (first-touch memory; not timed) on two evaluations or more, until they add
+// up to kTuneMinSeconds (at most kTuneRepeats; the least counts, as the least disturbed by
+// other work on the machine; one when it already takes kTuneSlower times the fastest so far),
+// at most kTuneTrees trees; the tree in use is kept unless another is faster by kTuneMargin.
+// A given leaf size or grid (request) is not tuned.
 //
 // Per evaluation:
 //   select(ev)   before it: ev (the evaluator in use) becomes the one of the tree to time next

@@ -17,7 +17,8 @@
 //   bench_solvers run --data FILE.data --ref FILE.ref --solver SPEC [--repeats R]
 //                     [--min-time T] [--clump K] [--atom-style STYLE] [--periodic]
 //       one solver: setup (`run 0`), for kifmm the evaluations of its tree tuning (untimed,
-//       counted in tune_evaluations and t_tune), then R timed force evaluations (pair->compute +
+//       counted in tune_evaluations and t_tune; with a given leaf size, the one evaluation
+//       that finds nothing to tune; none with tune=no), then R timed force evaluations (pair->compute +
 //       kspace->compute, forces only; wall time t_* and process CPU time c_*), the error of
 //       the last evaluation's total forces against the reference, peak memory; prints one
 //       line "RESULT {json}"

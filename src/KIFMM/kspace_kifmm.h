@@ -42,7 +42,10 @@ class KSpaceKIFMM : public KSpace {
   double measured_error() const { return last_measured_error; }
   const kifmm::Stats &engine_stats() const;
   int engine_order() const { return engine_options.order; }    // the order in use
-  bool tuning() const { return tuner.tuning(); }               // trees still being timed (tune yes)
+  // tune yes: trees to be timed from the start of a run (its first evaluation chooses the tree,
+  // tuning starts at the second) until the fastest is kept; with a tree that is not tuned (a
+  // given leaf size or grid), until the second evaluation finds that
+  bool tuning() const { return tune_pending || tuner.tuning(); }
   int engine_leaf_size() const { return engine_options.leaf_size; }
   int engine_grid() const { return engine_options.periodic_grid; }    // 0: the octree
   // time by phase since the setup of the current run (printed at its end)

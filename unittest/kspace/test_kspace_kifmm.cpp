@@ -674,7 +674,10 @@ TEST_F(KSpaceKifmm, MpiDistributedTreeTuningKeepsTheAccuracy)
   load(clusters_and_uniform(1500, 13, 1500, 14));
   Result ref = exact();
   commands("pair_style zero 0.01\npair_coeff * *\nkspace_style kifmm 1e-5\nkspace_modify kifmm check 1 3000");
+  captured("run 0 post no");
+  EXPECT_TRUE(kspace()->tuning());    // from the second evaluation of the run
   const std::string out = captured("run 100 post no");
+  EXPECT_FALSE(kspace()->tuning());
   const Result r{forces_by_id(), 0.0};
   EXPECT_LE(relative_force_error(r.f, ref.f), 1e-5);
   int me = 0;
@@ -708,6 +711,7 @@ TEST_F(KSpaceKifmm, MpiDistributedTreeTuningKeepsTheAccuracy)
   }
   commands("kspace_modify kifmm tune no check 0 1");
   const std::string fixed = captured("run 3 post no");
+  EXPECT_FALSE(kspace()->tuning());
   EXPECT_EQ(fixed.find("tree tuned"), std::string::npos) << fixed;
 }
 

@@ -1,7 +1,7 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Strong-scaling benchmark of the distributed evaluation (engine level, no LAMMPS):
-//   mpirun -np P bench_scaling N [uniform|periodic|plummer] [order] [reps] [top_level] [choice|leaf=M|grid=K|-]
-//          [charges|dipoles]
+//   mpirun -np P bench_scaling N [uniform|periodic|plummer] [order] [reps] [top_level]
+//          [choice|tuned|leaf=M|grid=K|-] [charges|dipoles]
 // Each rank makes only its own points: uniform in its brick of a P-brick decomposition of
 // [-1,1]^3 (as LAMMPS's processor grid; periodic: the same points, [-1,1]^3 is the periodic
 // cell, Laplace with its background term), or, for plummer, the points of a Plummer sphere in its
@@ -9,9 +9,10 @@
 // (rank 0): wall time per evaluation (max over ranks), CPU seconds per evaluation (sum over
 // ranks), phases (max over ranks), bytes sent per rank and ghost points per rank (min/avg/max).
 // "dipoles": every point also carries a random dipole moment (evaluate_dipoles_distributed,
-// with second derivatives at the targets).
-#include "fmm_core.h"
-#include "kernels.h"
+// with second derivatives at the targets). "tuned": from the choice, the tree is tuned by timing
+// as kspace_style kifmm tunes it on several ranks (kifmm::TreeTuner on the uniform ladder, the
+// slowest rank's time) before the timed evaluations; the JSON line adds the tuning evaluations.
+#include "kifmm.h"
 #include "mpi_communicator.h"
 
 #include "../bench_points.h"
@@ -24,6 +25,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <string>
 
 namespace {
@@ -71,7 +73,8 @@ int main(int argc, char **argv)
   // periodic, grid), as kspace_style kifmm on several ranks; default: the per-order leaf size
   // "leaf=M": that leaf size (octree); "grid=K": the periodic single-level grid of K^3 cells
   const std::string how = argc > 6 ? argv[6] : "";
-  const bool choice = how == "choice";
+  const bool tuned = how == "tuned";
+  const bool choice = how == "choice" || tuned;
   const bool dipoles = argc > 7 && std::string(argv[7]) == "dipoles";
   int g[3];
   grid(P, g);
@@ -122,19 +125,37 @@ int main(int argc, char **argv)
     o.periodic_grid = std::atoi(how.c_str() + 5);
   }
   kifmm::KernelSpec spec;
-  kifmm::FmmEvaluator<kifmm::LaplaceKernel> ev(kifmm::LaplaceKernel{}, spec, o);
+  std::unique_ptr<kifmm::Evaluator> ev = kifmm::make_evaluator(spec, o);
   kifmm::MpiCommunicator comm(MPI_COMM_WORLD);
   const std::size_t n = mine.size();
   std::vector<double> grad(3 * n), hess(dipoles ? 6 * n : 0), mu(dipoles ? 3 * n : 0);
   for (std::size_t i = 0; i < mu.size(); ++i) mu[i] = 0.01 * std::sin(1.0 + 7.0 * (double) (i + 13 * me));
   auto evaluate = [&]() {
     if (dipoles)
-      ev.evaluate_dipoles_distributed(comm, n, mine.xyz.data(), mine.q.data(), mu.data(), nullptr, grad.data(),
+      ev->evaluate_dipoles_distributed(comm, n, mine.xyz.data(), mine.q.data(), mu.data(), nullptr, grad.data(),
                                       hess.data());
     else
-      ev.evaluate_distributed(comm, n, mine.xyz.data(), mine.q.data(), nullptr, grad.data());
+      ev->evaluate_distributed(comm, n, mine.xyz.data(), mine.q.data(), nullptr, grad.data());
   };
   evaluate();    // warm-up (operators)
+  int tuning_evaluations = 0;
+  if (tuned) {
+    kifmm::TreeTuner tuner(spec, kifmm::TreeRequest{N, 0, o.periodic ? -1 : 0, true}, o, N, nullptr);
+    while (tuner.tuning()) {
+      tuner.select(ev);
+      MPI_Barrier(MPI_COMM_WORLD);
+      const double t0 = MPI_Wtime();
+      evaluate();
+      double t = MPI_Wtime() - t0 - ev->stats().t_precompute, slowest = t;
+      MPI_Allreduce(&t, &slowest, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+      tuner.record(slowest);
+    }
+    tuning_evaluations = tuner.evaluations();
+    const kifmm::TreeChoice t = tuner.finish(ev);
+    o.leaf_size = t.leaf_size;
+    o.periodic_grid = t.grid;
+    evaluate();    // warm-up of the tuned tree
+  }
   double wall = 0, cpu = 0;
   double ph[8] = {0, 0, 0, 0, 0, 0, 0, 0};
   for (int r = 0; r < reps; ++r) {
@@ -145,11 +166,11 @@ int main(int argc, char **argv)
     MPI_Barrier(MPI_COMM_WORLD);
     wall += t1 - t0;
     cpu += c1 - c0;
-    const kifmm::Stats &s = ev.stats();
+    const kifmm::Stats &s = ev->stats();
     const double p[8] = {s.t_tree, s.t_lists, s.t_upward, s.t_m2l, s.t_wx, s.t_downward, s.t_p2p, s.t_comm};
     for (int k = 0; k < 8; ++k) ph[k] += p[k];
   }
-  const kifmm::Stats &s = ev.stats();
+  const kifmm::Stats &s = ev->stats();
   double mx[10], sum[10], mn[10];
   double v[10] = {wall / reps, cpu / reps, (double) s.comm_bytes, (double) s.n_ghosts, (double) n,
                   (double) s.ghost_bytes, (double) s.let_bytes, (double) s.let_cells, 0, 0};
@@ -164,8 +185,8 @@ int main(int argc, char **argv)
     fclose(f);
   }
   if (me == 0) {
-    printf("{\"grid\": %d, \"leaf\": %d, \"strengths\": \"%s\", ", o.periodic_grid, o.leaf_size,
-           dipoles ? "dipoles" : "charges");
+    printf("{\"grid\": %d, \"leaf\": %d, \"strengths\": \"%s\", \"tuning_evaluations\": %d, ", o.periodic_grid,
+           o.leaf_size, dipoles ? "dipoles" : "charges", tuning_evaluations);
     printf("\"N\": %zu, \"dist\": \"%s\", \"order\": %d, \"ranks\": %d, \"threads\": %d, \"top_level\": %d, "
            "\"wall\": %.6g, \"cpu_sum\": %.6g, \"bytes_min\": %.0f, \"bytes_avg\": %.0f, \"bytes_max\": %.0f, "
            "\"ghost_bytes_max\": %.0f, \"let_bytes_max\": %.0f, \"let_cells_avg\": %.1f, "

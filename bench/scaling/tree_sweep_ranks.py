@@ -1,15 +1,17 @@
 #!/usr/bin/env python3
 # This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 # The tree of the distributed evaluation (kspace_style kifmm on several ranks: the uniform
-# model's leaf size or periodic grid, kifmm::choose_tree(order, N, periodic, grid)) against a
-# sweep of leaf sizes (and, periodic, single-level grids), on P ranks of bench_scaling.
+# model's leaf size or periodic grid, kifmm::choose_tree(order, N, periodic, grid)) and the tree
+# tuned by timing from it (as kspace_style kifmm with tune yes) against a sweep of leaf sizes
+# (and, periodic, single-level grids), on P ranks of bench_scaling.
 #   python3 bench/scaling/tree_sweep_ranks.py [--build build] [--np 2] [--rounds 3]
 #       [--cases uniform:1e5:3,6,10 periodic:1e5:3,6,10 plummer:1e5:3,6,10]
-# Every candidate is one bench_scaling process (2 evaluations after a warm-up); all candidates
+# Every candidate is one bench_scaling process (2 evaluations after a warm-up; the tuned one
+# after its tuning evaluations, which also warm it up longer); all candidates
 # of a case run in rotating order for --rounds rounds. Time: wall seconds per evaluation (the
-# slowest rank). Prints a provenance line and one markdown row per case: automatic and fastest
-# swept tree, their median times and auto / best (median over the rounds of the per-round
-# ratios; below 1: the automatic tree is faster than every swept one).
+# slowest rank). Prints a provenance line and one markdown row per case: automatic, tuned and
+# fastest swept tree, their median times, auto / best and tuned / best (medians over the rounds
+# of the per-round ratios; below 1: faster than every swept tree) and the tuning evaluations.
 import argparse
 import json
 import os
@@ -47,13 +49,14 @@ def main():
                                                     " ".join(load)))
     print("command: python3 bench/scaling/tree_sweep_ranks.py %s" % " ".join(sys.argv[1:]))
     print("\nwall s per evaluation on %d ranks x 1 thread (slowest rank), medians of %d rounds\n" % (a.np, a.rounds))
-    print("| points | N | p | ranks | tree auto / best | depth auto / best | s auto / best | auto/best | candidates |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("| points | N | p | ranks | tree auto / tuned / best | depth auto / tuned / best | s auto / tuned / best "
+          "| auto/best | tuned/best | candidates | tuning evaluations |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for case in a.cases:
         dist, n, orders = case.split(":")
         n = int(float(n))
         for order in [int(o) for o in orders.split(",")]:
-            hows = ["choice"] + ["leaf=%d" % l for l in (16, 32, 64, 128, 256, 512, 1024, 2048, 4096) if l <= n]
+            hows = ["choice", "tuned"] + ["leaf=%d" % l for l in (16, 32, 64, 128, 256, 512, 1024, 2048, 4096) if l <= n]
             if dist == "periodic":
                 hows += ["grid=%d" % k for k in (3, 4, 6, 8, 11, 16, 22) if 2 * k ** 3 <= n]
             times = {h: [] for h in hows}
@@ -70,13 +73,17 @@ def main():
                         times[h].append(row["wall"])
                         rows[h] = row
                 hows = [h for h in hows if h in times]
-            swept = [h for h in hows if h != "choice"]
+            swept = [h for h in hows if h not in ("choice", "tuned")]
             best = min(swept, key=lambda h: statistics.median(times[h]))
-            ratio = statistics.median([x / y for x, y in zip(times["choice"], times[best])])
-            ra, rb = rows["choice"], rows[best]
-            print("| %s | %d | %d | %d | %s / %s | %d / %d | %.4g / %.4g | %.2f | %d |" % (
-                dist, n, order, a.np, label(ra), label(rb), ra["depth"], rb["depth"],
-                statistics.median(times["choice"]), statistics.median(times[best]), ratio, len(swept)))
+
+            def over_best(h):
+                return statistics.median([x / y for x, y in zip(times[h], times[best])])
+
+            ra, rt, rb = rows["choice"], rows["tuned"], rows[best]
+            print("| %s | %d | %d | %d | %s / %s / %s | %d / %d / %d | %.4g / %.4g / %.4g | %.2f | %.2f | %d | %d |" % (
+                dist, n, order, a.np, label(ra), label(rt), label(rb), ra["depth"], rt["depth"], rb["depth"],
+                statistics.median(times["choice"]), statistics.median(times["tuned"]), statistics.median(times[best]),
+                over_best("choice"), over_best("tuned"), len(swept), rt["tuning_evaluations"]))
             sys.stdout.flush()
     print("\nload after %s" % " ".join(open("/proc/loadavg").read().split()[:3]))
 

@@ -46,6 +46,10 @@ class KSpaceKIFMM : public KSpace {
   // tuning starts at the second) until the fastest is kept; with a tree that is not tuned (a
   // given leaf size or grid), until the second evaluation finds that
   bool tuning() const { return tune_pending || tuner.tuning(); }
+  // the evaluations that settle the run's tree and order (tuning, and the measurement of the
+  // error of a tuned tree other than the modelled one) are still to come: after them every
+  // evaluation costs the same
+  bool settling() const { return tuning() || verify_pending; }
   int engine_leaf_size() const { return engine_options.leaf_size; }
   int engine_grid() const { return engine_options.periodic_grid; }    // 0: the octree
   // time by phase since the setup of the current run (printed at its end)

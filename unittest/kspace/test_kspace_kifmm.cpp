@@ -678,6 +678,7 @@ TEST_F(KSpaceKifmm, MpiDistributedTreeTuningKeepsTheAccuracy)
   EXPECT_TRUE(kspace()->tuning());    // from the second evaluation of the run
   const std::string out = captured("run 100 post no");
   EXPECT_FALSE(kspace()->tuning());
+  EXPECT_FALSE(kspace()->settling());
   const Result r{forces_by_id(), 0.0};
   EXPECT_LE(relative_force_error(r.f, ref.f), 1e-5);
   int me = 0;

@@ -30,7 +30,7 @@ LABELS = {"kifmm": "kifmm", "msm": "msm (pair coul/msm + kspace msm)",
 
 # archived kifmm runs of earlier engine commits (results/kifmm-COMMIT.jsonl), newest first;
 # any other kifmm-*.jsonl next to the results file is listed after these
-ARCHIVES = ("kifmm-2c78d4f.jsonl", "kifmm-c4d85d4.jsonl", "kifmm-923c304.jsonl", "kifmm-cbcfc98.jsonl")
+ARCHIVES = ("kifmm-c4d85d4.jsonl", "kifmm-923c304.jsonl", "kifmm-cbcfc98.jsonl")
 
 SKIPPED_WALL = []    # (case, n, spec) of runs without CPU times (left out: see load)
 
@@ -1441,8 +1441,7 @@ comparable between runs made hours apart:
   the same ratio over the sampled atoms only (**sampled reference**, marked in the plots).
   The reference was checked against LAMMPS's own direct sum (pair coul/cut with a cutoff
   beyond the box, solver `coulcut`): they agree to ~1e-15 where both ran.
-* **eval**: time per force evaluation after setup (kifmm: after its tree tuning, whose
-  evaluations are in `tune_evaluations` and `t_tune`): `pair->compute(0,0)` plus
+* **eval**: time per force evaluation after setup: `pair->compute(0,0)` plus
   `kspace->compute(0,0)` called directly (forces only, no energy/virial, no neighbor list
   rebuild: atoms do not move), **median** of at least 3 evaluations and at least 1 s. The
   time is the **CPU time of the process** (`CLOCK_PROCESS_CPUTIME_ID`; every solver runs on
@@ -1862,8 +1861,7 @@ ewald, pppm: accuracy, pair cutoff and order), each on one thread in its own pro
 * **error**: relative RMS error of the total force on the atoms, `||F - F_exact|| /
   ||F_exact||`, against the exact direct sum (periodic: an Ewald sum at double accuracy);
   for the largest N (marked `*`) on a random sample of atoms;
-* **cost**: CPU time of one force evaluation after setup and, for kifmm, after the
-  evaluations that tune its tree (median of at least 3).
+* **cost**: CPU time of one force evaluation after setup (median of at least 3).
 
 A solver's time at an error E is interpolated on its Pareto front (the runs that no other run
 of the same solver beats in both time and error), so each solver is taken at its best setting

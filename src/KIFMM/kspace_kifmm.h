@@ -40,6 +40,9 @@ class KSpaceKIFMM : public KSpace {
 
   // last measured relative RMS force error of `check` (negative when never measured)
   double measured_error() const { return last_measured_error; }
+  // exact sums computed for the error measurements (one per step and sample: a measurement of
+  // the same step on the same atoms reuses the last one)
+  long exact_sums() const { return exact_reference.sums; }
   const kifmm::Stats &engine_stats() const;
   int engine_order() const { return engine_options.order; }    // the order in use
   // tune yes: trees to be timed from the start of a run (its first evaluation chooses the tree,
@@ -125,6 +128,17 @@ class KSpaceKIFMM : public KSpace {
   };
   MeasuredError measure_error(int nsamples);
   MeasuredError measure_dipole_error(int nsamples);
+  // the exact gradients at the last measurement's sample, reused by the next measurement of the
+  // same step on the same atoms (the order search measures each order it tries on that sample)
+  struct ExactReference {
+    bigint step = -1;
+    int order = -1;                  // kifmm::reference_order of the sum
+    unsigned long long atoms = 0;    // hash of the positions and strengths
+    std::vector<std::size_t> sample;
+    std::vector<double> exact;
+    long sums = 0;
+  } exact_reference;
+  void exact_gradient_at(const std::vector<std::size_t> &sample, std::vector<double> &exact);
   void check_error();
   // order from the accuracy: at the first evaluation of a run the error is measured on the
   // atoms and the order raised until the request is met, or lowered while it is still met

@@ -1,6 +1,7 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Measured error of kspace_style kifmm: the evaluated forces of a random sample against the
-// exact sum (open: direct sum over all atoms; periodic: Ewald sum), on what the integrator uses:
+// exact sum (open: direct sum over all atoms; periodic: Ewald sum, in large boxes the engine at
+// order 14, kifmm::reference_order), on what the integrator uses:
 // the forces of free atoms, and the net force and torque of each rigid clump (fix clump/rigid;
 // the forces inside a clump cancel there, so they are not what needs to be accurate).
 // Used by `kspace_modify kifmm check` and, at the first evaluation of a run whose order comes
@@ -18,6 +19,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <mpi.h>
 #include <random>
@@ -77,12 +79,8 @@ KSpaceKIFMM::MeasuredError KSpaceKIFMM::measure_error(int nsamples)
   for (std::size_t k = 0; k < n; ++k)
     if (!is_free(k) && body_hash(point_body[k], seed) < p_clump) sample.push_back(k);
 
-  // exact gradients at the sample
-  std::vector<double> txyz(3 * sample.size()), exact(3 * sample.size(), 0.0);
-  for (std::size_t k = 0; k < sample.size(); ++k)
-    for (int d = 0; d < 3; ++d) txyz[3 * k + d] = xyz[3 * sample[k] + d];
-  kifmm::exact_gradient(*engine, distributed() ? kcomm.get() : nullptr, strength.size(), xyz.data(),
-                        strength.data(), sample.size(), txyz.data(), exact.data());
+  std::vector<double> exact;
+  exact_gradient_at(sample, exact);
 
   // free atoms: their forces; clumps: net force and torque, summed over ranks per clump.
   // sums[2]: the squared evaluated forces of all free atoms (see the estimate below)
@@ -162,6 +160,42 @@ KSpaceKIFMM::MeasuredError KSpaceKIFMM::measure_error(int nsamples)
     if (csum[3] > 0 || csum[2] > 0) m.clump_torque = kifmm::relative_rms(csum[2], csum[3]);
   }
   return m;
+}
+
+// The exact gradients at the sample (kifmm::exact_gradient; collective), or those of the last
+// measurement when it was of the same step, sample, atoms and kind of reference on every rank.
+void KSpaceKIFMM::exact_gradient_at(const std::vector<std::size_t> &sample, std::vector<double> &exact)
+{
+  unsigned long long h = 1469598103934665603ULL;    // FNV-1a over the words of the points
+  auto mix = [&h](const std::vector<double> &v) {
+    for (double x : v) {
+      unsigned long long w;
+      std::memcpy(&w, &x, sizeof w);
+      h = (h ^ w) * 1099511628211ULL;
+    }
+  };
+  mix(xyz);
+  mix(strength);
+  ExactReference &r = exact_reference;
+  const int order = kifmm::reference_order(engine->options(), strength.size(), sample.size());
+  int same = r.step == update->ntimestep && r.order == order && r.atoms == h && r.sample == sample, all_same = 0;
+  MPI_Allreduce(&same, &all_same, 1, MPI_INT, MPI_MIN, world);
+  if (all_same) {
+    exact = r.exact;
+    return;
+  }
+  std::vector<double> txyz(3 * sample.size());
+  exact.assign(3 * sample.size(), 0.0);
+  for (std::size_t k = 0; k < sample.size(); ++k)
+    for (int d = 0; d < 3; ++d) txyz[3 * k + d] = xyz[3 * sample[k] + d];
+  kifmm::exact_gradient(*engine, distributed() ? kcomm.get() : nullptr, strength.size(), xyz.data(),
+                        strength.data(), sample.size(), txyz.data(), exact.data());
+  r.step = update->ntimestep;
+  r.order = order;
+  r.atoms = h;
+  r.sample = sample;
+  r.exact = exact;
+  ++r.sums;
 }
 
 std::string KSpaceKIFMM::MeasuredError::describe() const

@@ -450,6 +450,32 @@ TEST_F(Periodic, CheckUsesThePeriodicReference)
   EXPECT_NEAR(measured, full, 1e-3 * full);
 }
 
+// 6000 atoms, all sampled: 3.6e7 source-target pairs, above which the reference is the
+// engine at order 14 (kifmm::reference_order); the search and the check of step 0 measure
+// the same sample of the same atoms: one exact sum
+TEST_F(Periodic, CheckInALargeBoxAgainstTheEngineAtOrder14)
+{
+  load(uniform_cube(6000, 51));
+  Result ref = ewald_reference();
+  Result r = kifmm("1e-4", "order 4 check 1 6000");
+  const double full = relative_force_error(r.f, ref.f), measured = evaluate("v_kifmm_error");
+  EXPECT_GT(full, 1e-7);
+  EXPECT_NEAR(measured, full, 1e-3 * full);
+  commands("kspace_style none\npair_style zero 0.01\npair_coeff * *\nkspace_style kifmm 1e-5\n"
+           "kspace_modify kifmm check 1 6000");
+  const std::string out = output_of("run 0 post no");
+  auto *ks = dynamic_cast<LAMMPS_NS::KSpaceKIFMM *>(lmp->force->kspace);
+  ASSERT_NE(ks, nullptr);
+  if (rank() == 0) {
+    EXPECT_NE(out.find(" on these atoms"), std::string::npos) << out;    // the search: two orders
+    EXPECT_NE(out.find("KIFMM check at step 0"), std::string::npos) << out;
+  }
+  EXPECT_EQ(ks->exact_sums(), 1);
+  const double full5 = relative_force_error(forces_by_id(), ref.f);
+  EXPECT_LE(full5, 1e-5);
+  EXPECT_NEAR(evaluate("v_kifmm_error"), full5, 1e-3 * full5);
+}
+
 // ---------------------------------------------------------------- yukawa
 
 TEST_F(Periodic, YukawaEqualsCoulDebyeOverImages)

@@ -30,7 +30,7 @@ LABELS = {"kifmm": "kifmm", "msm": "msm (pair coul/msm + kspace msm)",
 
 # archived kifmm runs of earlier engine commits (results/kifmm-COMMIT.jsonl), newest first;
 # any other kifmm-*.jsonl next to the results file is listed after these
-ARCHIVES = ("kifmm-c4d85d4.jsonl", "kifmm-923c304.jsonl", "kifmm-cbcfc98.jsonl")
+ARCHIVES = ("kifmm-2c78d4f.jsonl", "kifmm-c4d85d4.jsonl", "kifmm-923c304.jsonl", "kifmm-cbcfc98.jsonl")
 
 SKIPPED_WALL = []    # (case, n, spec) of runs without CPU times (left out: see load)
 
@@ -1465,8 +1465,12 @@ comparable between runs made hours apart:
   the boundary) or `kspace_modify kifmm order P` for explicit orders (`P=` in the tables).
   The leaf size is chosen at the first evaluation of each run from the atom positions
   (one rank: kifmm::choose_tree(kernel, options, n, xyz) builds the octree of the atoms for a
-  few candidate leaf sizes and keeps the one of least modelled cost). The tree depth of each
-  run is `depth` in results.jsonl.
+  few candidate leaf sizes and keeps the one of least modelled cost), then tuned by timing
+  (`kspace_modify kifmm tune`, default yes: the first evaluations of a run time neighbouring
+  trees and keep the fastest). The timed evaluations come after the tuning and after the
+  error measurement of the tree kept, so **eval** is the time of the tree kifmm runs with;
+  those evaluations are counted in results.jsonl as `tune_evaluations` (wall time `t_tune`).
+  The tree depth of each run is `depth` in results.jsonl.
 * msm: `pair_style coul/msm C*s` (s = mean atom spacing of the box, `(V/N)^(1/3)`),
   `pair_modify table 0`, `kspace_style msm A*F_rms`, `kspace_modify cutoff/adjust no` and
   optionally `order`. LAMMPS's msm accuracy is absolute (relative to the force between two
@@ -1861,7 +1865,8 @@ ewald, pppm: accuracy, pair cutoff and order), each on one thread in its own pro
 * **error**: relative RMS error of the total force on the atoms, `||F - F_exact|| /
   ||F_exact||`, against the exact direct sum (periodic: an Ewald sum at double accuracy);
   for the largest N (marked `*`) on a random sample of atoms;
-* **cost**: CPU time of one force evaluation after setup (median of at least 3).
+* **cost**: CPU time of one force evaluation after setup (median of at least 3; kifmm after
+  the evaluations that tune its tree).
 
 A solver's time at an error E is interpolated on its Pareto front (the runs that no other run
 of the same solver beats in both time and error), so each solver is taken at its best setting

@@ -125,8 +125,39 @@ TEST(Diagnostics, ExactGradientInALargePeriodicBoxIsTheEngineAtOrder14)
         den += ewald[k] * ewald[k];
       }
       EXPECT_LT(std::sqrt(num / den), 1e-10) << "kernel " << (int) kernel.type << ", shape " << shape[2];
+      EXPECT_GT(num, 0.0);    // not the Ewald sum itself
     }
   }
+}
+
+// The same for charges and dipoles (p p p coulomb): gradients and second derivatives
+TEST(Diagnostics, ExactDipoleFieldInALargePeriodicBoxIsTheEngineAtOrder14)
+{
+  const std::size_t nt = 1000, nref = 60;
+  const auto p = kifmm_test::neutral(kifmm_test::uniform_cube(6000, 9));
+  std::vector<double> mu(3 * p.size());
+  for (std::size_t k = 0; k < mu.size(); ++k) mu[k] = 0.01 * std::sin(1.0 + 7.0 * k);
+  const std::vector<double> t(p.xyz.begin(), p.xyz.begin() + 3 * nt);
+  Options opt;
+  opt.order = 8;
+  opt.periodic = opt.fixed_root = true;
+  auto ev = make_evaluator(KernelSpec{}, opt);
+  ASSERT_EQ(reference_order(ev->options(), p.size(), nt), 14);
+  std::vector<double> g(3 * nt, 0.0), h(6 * nt, 0.0), rg(3 * nref), rh(6 * nref);
+  exact_dipole_field(*ev, nullptr, p.size(), p.xyz.data(), p.q.data(), mu.data(), nt, t.data(), g.data(), h.data());
+  periodic_dipole_direct_sum(opt.root_center, 1.0, nullptr, p.size(), p.xyz.data(), p.q.data(), mu.data(), nref,
+                             t.data(), nullptr, rg.data(), rh.data());
+  auto rel = [](const std::vector<double> &a, const std::vector<double> &ref) {
+    double num = 0, den = 0;
+    for (std::size_t k = 0; k < ref.size(); ++k) {
+      num += (a[k] - ref[k]) * (a[k] - ref[k]);
+      den += ref[k] * ref[k];
+    }
+    return std::sqrt(num / den);
+  };
+  EXPECT_LT(rel(g, rg), 1e-10);
+  EXPECT_LT(rel(h, rh), 1e-10);
+  EXPECT_GT(rel(g, rg), 0.0);    // not the Ewald sum itself
 }
 
 TEST(Diagnostics, SampleWithoutReplacement)

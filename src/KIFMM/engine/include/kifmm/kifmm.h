@@ -626,15 +626,16 @@ void periodic_dipole_point_virial(Evaluator &ev, Communicator &comm, std::size_t
 void exact_gradient(const Evaluator &ev, Communicator *comm, std::size_t n_src,
                     const double *src_xyz, const double *src_q, std::size_t n_trg,
                     const double *trg_xyz, double *grad);
-// 0 where exact_gradient (of n_src sources at n_trg targets, per rank) sums exactly; else the
-// order of the engine evaluation it takes as the reference: 14 in a periodic box (p p p) above
+// 0 where exact_gradient and exact_dipole_field (of n_src sources at n_trg targets, per rank)
+// sum exactly; else the order of the engine evaluation they take as the reference: 14 in a periodic box (p p p) above
 // 5e6 source-target pairs when the evaluator's order is 11 or below (it agrees with the Ewald
 // sum to 1e-11 .. 4e-11; the Ewald sum costs O(n_src n_trg) erfc terms, 35 s for 1000 targets
 // of 1e5 sources on one core, the engine 0.6 s).
 int reference_order(const Options &opt, std::size_t n_src, std::size_t n_trg);
 // The same for charges and dipoles: the exact gradient and second derivatives at the targets
-// (open: direct_sum_dipoles; p p p: an Ewald sum with the engine's conventions; a slab or
-// periodic yukawa: the engine at order 14, 1e-10 in the tests); with comm as exact_gradient.
+// (open: direct_sum_dipoles; p p p: an Ewald sum with the engine's conventions, or where
+// reference_order is not 0 the engine at that order; a slab or periodic yukawa: the engine at
+// order 14, 1e-10 in the tests); with comm as exact_gradient.
 void exact_dipole_field(const Evaluator &ev, Communicator *comm, std::size_t n_src, const double *src_xyz,
                         const double *src_q, const double *src_mu, std::size_t n_trg, const double *trg_xyz,
                         double *grad, double *hess);

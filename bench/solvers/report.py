@@ -1439,6 +1439,11 @@ comparable between runs made hours apart:
   `kifmm::direct_sum` on every atom for N <= 120000; above that (the 1e6 runs) it is computed
   on a random sample of 4000 atoms (whole clumps for clump configurations) and the error is
   the same ratio over the sampled atoms only (**sampled reference**, marked in the plots).
+  On random atoms the squared force is dominated by the few closest pairs, which a sample
+  mostly misses, so the sample's own denominator is small and these errors tend to be high:
+  kifmm's own measurement, which divides the sample's squared error scaled to all atoms by
+  the squared forces of all atoms (doc/kspace_kifmm.rst, close pairs), and its bound from
+  the difference of two orders over all atoms (in the run logs) can be below them.
   The reference was checked against LAMMPS's own direct sum (pair coul/cut with a cutoff
   beyond the box, solver `coulcut`): they agree to ~1e-15 where both ran.
 * **eval**: time per force evaluation after setup: `pair->compute(0,0)` plus
@@ -1454,7 +1459,9 @@ comparable between runs made hours apart:
   wall-clock and CPU times).
 * **setup**: CPU time (the wall time is in results.jsonl as `t_setup`) of the first
   `run 0 post no` (init, neighbor lists, grid or operator setup and the first evaluation
-  including energy). kifmm reads its translation operators
+  including energy and virial; kifmm in a periodic box computes the virial on a
+  single-level grid, which on clustered atoms costs many evaluations of its octree: the
+  setup times of plummer_periodic). kifmm reads its translation operators
   from a warm disk cache (filled by the `setup` step of the campaign); the cold precompute
   per order is in the operator setup table.
 * **memory**: peak resident memory of the solver: `/proc/self/status` VmHWM after the

@@ -828,6 +828,50 @@ TEST_F(Periodic, PressureTensorEqualsEwald)
   }
 }
 
+// Clustered atoms next to the octree: on one rank the virial's grid is the one of least
+// modelled cost on the atoms' cell occupancies (here 4^3 cells, where the rule of about as many
+// cells as the octree's leaves, used on several ranks, gives 5^3); the tensor equals Ewald's.
+TEST_F(Periodic, VirialGridOfClusteredAtomsIsChosenFromTheAtoms)
+{
+  const Configuration c = plummer(3000, 73);
+  load(c);
+  Result ref = ewald_reference();
+  commands("kspace_style none\npair_style zero 0.01\npair_coeff * *\nkspace_style kifmm 1e-6\n"
+           "kspace_modify kifmm order 8 leaf 32 tune no\n"
+           "thermo_style custom step elong pxx pyy pzz pxy pxz pyz\nthermo_modify norm no");
+  const std::string out = output_of("run 0 post no");
+  const double *w = lmp->force->kspace->virial;
+  double scale = 0, err = 0;
+  for (int k = 0; k < 6; ++k) {
+    scale += ref.w[k] * ref.w[k];
+    err += (w[k] - ref.w[k]) * (w[k] - ref.w[k]);
+  }
+  EXPECT_LE(std::sqrt(err / scale), 2e-5);    // order 8
+  int nproc = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &nproc);
+  if (rank() != 0 || nproc > 1) return;
+  const std::string tag = "virial tensor (pressure components, per-atom virial) is computed on a single-level grid of ";
+  const std::size_t at = out.find(tag);
+  ASSERT_NE(at, std::string::npos) << out;
+  int k = 0;
+  ASSERT_EQ(std::sscanf(out.c_str() + at + tag.size(), "%d^3", &k), 1) << out;
+  kifmm::Options o;
+  o.order = 8;
+  o.leaf_size = 32;
+  o.periodic = o.fixed_root = true;
+  o.root_half_width = 0.5;
+  o.root_center[0] = o.root_center[1] = o.root_center[2] = 0.5;
+  std::vector<double> xyz;
+  for (const auto &[id, x] : positions_by_id()) xyz.insert(xyz.end(), {x[0], x[1], x[2]});
+  int cheapest = 0;
+  double least = 0;
+  for (const kifmm::TreeChoice &g : kifmm::model_grids(kifmm::KernelSpec{}, o, xyz.size() / 3, xyz.data(), false))
+    if (cheapest == 0 || g.cost < least) cheapest = g.grid, least = g.cost;
+  EXPECT_EQ(k, cheapest) << out;
+  const int uniform_rule = 5;    // cbrt(3000 / 32) = 4.5 cells per axis
+  EXPECT_NE(cheapest, uniform_rule) << "the test does not tell the two choices apart";
+}
+
 // Shear: pxy against the numerical derivative of the energy under a small tilt (ewald of the
 // triclinic box, complete with coul/long): W_xy = -dU/d(gamma), x -> x + gamma y.
 TEST_F(Periodic, PressureTensorIsTheStrainDerivativeUnderShear)

@@ -86,9 +86,6 @@ std::vector<double> summed_at_all_targets(Communicator &comm, std::size_t n_trg,
   return out;
 }
 
-}    // namespace
-
-namespace {
 // The Ewald sum of periodic_direct_sum costs about 0.35 us per source-target pair on one core
 // (erfc terms of about 6 images per pair; 35 s for 1000 targets of 1e5 sources), the engine at
 // order 14 about 6 us per source (0.6 s at 1e5; its operators once per process, or once per

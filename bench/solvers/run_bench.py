@@ -308,11 +308,13 @@ def main():
             ref = os.path.join(args.work, "ref", tag + ".ref")
             # open boundaries above direct_max_n: the reference on a sample also times the
             # direct sum (CPU time on the sampled targets, all sources), which is the direct
-            # sum's cost at that N scaled by N / sampled; references made before that field
-            # existed are made again (same sample, same forces)
+            # sum's cost at that N scaled by N / sampled; a sampled reference also holds the
+            # RMS force over all atoms (f_rms_all, the denominator of the errors); references
+            # made before those fields existed are made again (same sample, same forces)
             prev_ref = done.get(("reference", name, n, "reference"))
-            stale = (prev_ref is not None and not periodic and natoms > lim["direct_max_n"]
-                     and "c_direct_sum" not in prev_ref)
+            stale = prev_ref is not None and (
+                (not periodic and natoms > lim["direct_max_n"] and "c_direct_sum" not in prev_ref)
+                or (0 < prev_ref.get("sampled", natoms) < natoms and "f_rms_all" not in prev_ref))
             if prev_ref is None or stale or not os.path.exists(ref):
                 cmd = [args.bin, "ref", "--data", data, "--out", ref, "--clump", str(clump),
                        "--atom-style", atom_style]

@@ -13,10 +13,28 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <utility>
 #include <vector>
 
 namespace bench {
+
+// The sampled error of gradients grad of all n points (charges q) against the exact gradients
+// of the sampled ones, as kspace_style kifmm measures it (kifmm::sampled_relative_error)
+inline double sampled_error(std::size_t n, const double *q, const double *grad, const std::vector<std::size_t> &sample,
+                            const std::vector<double> &sample_exact)
+{
+  double d2 = 0, r2 = 0, all2 = 0;
+  for (std::size_t k = 0; k < sample.size(); ++k)
+    for (int d = 0; d < 3; ++d) {
+      const double qi = q[sample[k]], a = qi * grad[3 * sample[k] + d], e = qi * sample_exact[3 * k + d];
+      d2 += (a - e) * (a - e);
+      r2 += e * e;
+    }
+  for (std::size_t i = 0; i < n; ++i)
+    for (int d = 0; d < 3; ++d) all2 += q[i] * q[i] * grad[3 * i + d] * grad[3 * i + d];
+  return kifmm::sampled_relative_error(d2, r2, (double) sample.size(), (double) n, all2);
+}
 
 // An evaluation at an order on a fixed tree, and its sampled error
 struct SampledOrderTrials : kifmm::OrderTrials {
@@ -48,16 +66,7 @@ struct SampledOrderTrials : kifmm::OrderTrials {
     std::vector<double> pot(n);
     kifmm::make_evaluator(kernel, options)->evaluate(n, xyz, q, n, xyz, pot.data(), grad.data());
     ++evaluations;
-    double d2 = 0, r2 = 0, all2 = 0;
-    for (std::size_t k = 0; k < sample.size(); ++k)
-      for (int d = 0; d < 3; ++d) {
-        const double qi = q[sample[k]], a = qi * grad[3 * sample[k] + d], e = qi * sample_exact[3 * k + d];
-        d2 += (a - e) * (a - e);
-        r2 += e * e;
-      }
-    for (std::size_t i = 0; i < n; ++i)
-      for (int d = 0; d < 3; ++d) all2 += q[i] * q[i] * grad[3 * i + d] * grad[3 * i + d];
-    return kifmm::sampled_relative_error(d2, r2, (double) sample.size(), (double) n, all2);
+    return sampled_error(n, q, grad.data(), sample, sample_exact);
   }
   double measure(int order) override
   {
@@ -117,6 +126,36 @@ inline MeasuredOrder measured_order(const kifmm::KernelSpec &kernel, const kifmm
   const kifmm::OrderFound f =
       kifmm::search_order(t, {calibrated, first}, request, 3, kifmm::max_calibrated_order());
   return MeasuredOrder{calibrated, t.options, f, t.grad, t.evaluations};
+}
+
+// The tree kspace_style kifmm keeps after tuning it at the measured order (kifmm::TreeTuner,
+// one process, open boundaries, no leaf size given): the trees near the chosen one, each timed
+// on real evaluations by seconds() (a clock), the fastest kept; a tree whose sampled error
+// exceeds order_search_margin * request after its first evaluation is not used. Returns the
+// options of the tree kept; evaluations: the tuning's evaluations.
+template <class Clock>
+kifmm::Options tuned_options(const kifmm::KernelSpec &kernel, const MeasuredOrder &m, double request, std::size_t n,
+                             const double *xyz, const double *q, const std::vector<std::size_t> &sample,
+                             const std::vector<double> &sample_exact, Clock seconds, int &evaluations)
+{
+  const kifmm::TreeRequest tree{n, 0, m.options.periodic ? -1 : 0, false};
+  kifmm::TreeTuner tuner(kernel, tree, m.options, n, xyz);
+  std::unique_ptr<kifmm::Evaluator> ev = kifmm::make_evaluator(kernel, m.options);
+  std::vector<double> pot(n), grad(3 * n);
+  while (tuner.tuning()) {
+    tuner.select(ev);
+    const double t0 = seconds();
+    ev->evaluate(n, xyz, q, n, xyz, pot.data(), grad.data());
+    const double t = seconds() - t0 - ev->stats().t_precompute;
+    if (tuner.new_tree() &&
+        sampled_error(n, q, grad.data(), sample, sample_exact) > kifmm::order_search_margin * request)
+      tuner.reject(ev);
+    else
+      tuner.record(t);
+  }
+  evaluations = tuner.evaluations();
+  tuner.finish(ev);
+  return ev->options();
 }
 
 }    // namespace bench

@@ -4,11 +4,14 @@
 // without a leaf size: kifmm::choose_order, then kifmm::plan_tree and the choice from the
 // points, kifmm::choose_tree_from_points, then the order measured on the points,
 // kifmm::search_order, with 1000 sampled targets other than the benchmark's error targets;
-// bench/measured_order.h) or ACC:LEAF (order of the calibration table for ACC, leaf size given).
+// then the tree tuned by timing the trees near it, kifmm::TreeTuner, a tree whose error on those
+// targets misses the request not used; bench/measured_order.h) or ACC:LEAF (order of the
+// calibration table for ACC, leaf size given).
 // Timed: Evaluator::evaluate (tree, lists, all passes; potential and gradient of all points),
 // after W untimed evaluations (--warmup; an evaluation that built operators is never timed).
-// Not timed, reported: the tree choice and the order search (choice=, seconds, with the
-// search's evaluations, search_evaluations=) and the operator precomputation (precompute=).
+// Not timed, reported: the tree choice, the order search and the tuning (choice=, seconds, with
+// the search's evaluations, search_evaluations=, and the tuning's, tune_evaluations=) and the
+// operator precomputation (precompute=).
 // Usage: anchors_ours PROBLEM_FILE --settings ACC[:LEAF],... [--reps R] [--warmup W]
 #include "anchors_problem.h"
 #include "kifmm.h"
@@ -38,7 +41,7 @@ int main(int argc, char **argv)
     const double acc = s.first;
     const int leaf = (int) s.second;
     kifmm::Options opt;
-    int search_evaluations = 0;
+    int search_evaluations = 0, tune_evaluations = 0;
     const anchors::Clock c0 = anchors::Clock::now();
     if (leaf > 0) {
       opt.order = kifmm::choose_order(kernel, acc).order;
@@ -46,8 +49,14 @@ int main(int argc, char **argv)
     } else {
       const bench::MeasuredOrder m =
           bench::measured_order(kernel, kifmm::Options{}, acc, p.n, p.xyz.data(), p.q.data(), search, search_exact);
-      opt = m.options;
       search_evaluations = m.evaluations;
+      // the tree tuned at that order, as kspace_style kifmm tunes it (CPU time on one thread,
+      // wall time on more)
+      const bool cpu = anchors::compare_cpu();
+      opt = bench::tuned_options(
+          kernel, m, acc, p.n, p.xyz.data(), p.q.data(), search, search_exact,
+          [cpu]() { const anchors::Clock t = anchors::Clock::now(); return cpu ? t.cpu : t.wall; },
+          tune_evaluations);
     }
     const double t_choice = (anchors::Clock::now() - c0).wall;
     auto ev = kifmm::make_evaluator(kernel, opt);
@@ -66,9 +75,10 @@ int main(int argc, char **argv)
       } while (ev->stats().t_precompute > 0);
       if (r < 0) continue;
       const double err = anchors::gradient_error(p, grad.data(), 1.0);
-      char extra[200];
-      std::snprintf(extra, sizeof(extra), "choice=%.3f search_evaluations=%d precompute=%.3f precompute_in_timed=%.3f",
-                    t_choice, search_evaluations, t_pre, ev->stats().t_precompute);
+      char extra[240];
+      std::snprintf(extra, sizeof(extra),
+                    "choice=%.3f search_evaluations=%d tune_evaluations=%d precompute=%.3f precompute_in_timed=%.3f",
+                    t_choice, search_evaluations, tune_evaluations, t_pre, ev->stats().t_precompute);
       anchors::print_row("ours", p, setting, opt.order, opt.leaf_size, ev->stats().depth, err, t, extra);
     }
   }

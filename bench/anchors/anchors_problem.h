@@ -98,6 +98,13 @@ struct Clock {
   Clock operator+(const Clock &o) const { return {cpu + o.cpu, wall + o.wall}; }
 };
 
+// The time the benchmark compares (ANCHORS_TIME, set by run.sh): CPU time unless "wall"
+inline bool compare_cpu()
+{
+  const char *e = std::getenv("ANCHORS_TIME");
+  return !e || std::strcmp(e, "wall") != 0;
+}
+
 // Command line of a driver: PROBLEM_FILE [--settings A:B,C:D,...] [--reps R] [--warmup W] [--cache DIR]
 struct Args {
   std::string file, cache;

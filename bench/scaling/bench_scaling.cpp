@@ -1,7 +1,7 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Strong-scaling benchmark of the distributed evaluation (engine level, no LAMMPS):
 //   mpirun -np P bench_scaling N [uniform|periodic|plummer] [order] [reps] [top_level]
-//          [choice|tuned|leaf=M|grid=K|-] [charges|dipoles]
+//          [choice|tuned|leaf=M|grid=K|-] [charges|dipoles] [warm-ups]
 // Each rank makes only its own points: uniform in its brick of a P-brick decomposition of
 // [-1,1]^3 (as LAMMPS's processor grid; periodic: the same points, [-1,1]^3 is the periodic
 // cell, Laplace with its background term), or, for plummer, the points of a Plummer sphere in its
@@ -12,6 +12,8 @@
 // with second derivatives at the targets). "tuned": from the choice, the tree is tuned by timing
 // as kspace_style kifmm tunes it on several ranks (kifmm::TreeTuner on the uniform ladder, the
 // slowest rank's time) before the timed evaluations; the JSON line adds the tuning evaluations.
+// warm-ups (default 1): untimed evaluations of the tree before the timed ones (the tuned tree:
+// after its tuning), so that candidates compared in a sweep can be warmed up alike.
 #include "kifmm.h"
 #include "mpi_communicator.h"
 
@@ -76,6 +78,7 @@ int main(int argc, char **argv)
   const bool tuned = how == "tuned";
   const bool choice = how == "choice" || tuned;
   const bool dipoles = argc > 7 && std::string(argv[7]) == "dipoles";
+  const int warmups = argc > 8 ? std::max(1, std::atoi(argv[8])) : 1;
   int g[3];
   grid(P, g);
   const int c[3] = {me % g[0], (me / g[0]) % g[1], me / (g[0] * g[1])};
@@ -138,6 +141,7 @@ int main(int argc, char **argv)
       ev->evaluate_distributed(comm, n, mine.xyz.data(), mine.q.data(), nullptr, grad.data());
   };
   evaluate();    // warm-up (operators)
+  for (int w = 1; w < warmups && !tuned; ++w) evaluate();
   int tuning_evaluations = 0;
   if (tuned) {
     kifmm::TreeTuner tuner(spec, kifmm::TreeRequest{N, 0, o.periodic ? -1 : 0, true}, o, N, nullptr);
@@ -154,7 +158,7 @@ int main(int argc, char **argv)
     const kifmm::TreeChoice t = tuner.finish(ev);
     o.leaf_size = t.leaf_size;
     o.periodic_grid = t.grid;
-    evaluate();    // warm-up of the tuned tree
+    for (int w = 0; w < warmups; ++w) evaluate();    // warm-up of the tuned tree
   }
   double wall = 0, cpu = 0;
   double ph[8] = {0, 0, 0, 0, 0, 0, 0, 0};
@@ -185,8 +189,8 @@ int main(int argc, char **argv)
     fclose(f);
   }
   if (me == 0) {
-    printf("{\"grid\": %d, \"leaf\": %d, \"strengths\": \"%s\", \"tuning_evaluations\": %d, ", o.periodic_grid,
-           o.leaf_size, dipoles ? "dipoles" : "charges", tuning_evaluations);
+    printf("{\"grid\": %d, \"leaf\": %d, \"strengths\": \"%s\", \"tuning_evaluations\": %d, \"warmups\": %d, ",
+           o.periodic_grid, o.leaf_size, dipoles ? "dipoles" : "charges", tuning_evaluations, warmups);
     printf("\"N\": %zu, \"dist\": \"%s\", \"order\": %d, \"ranks\": %d, \"threads\": %d, \"top_level\": %d, "
            "\"wall\": %.6g, \"cpu_sum\": %.6g, \"bytes_min\": %.0f, \"bytes_avg\": %.0f, \"bytes_max\": %.0f, "
            "\"ghost_bytes_max\": %.0f, \"let_bytes_max\": %.0f, \"let_cells_avg\": %.1f, "

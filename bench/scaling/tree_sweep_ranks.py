@@ -6,9 +6,10 @@
 # (and, periodic, single-level grids), on P ranks of bench_scaling.
 #   python3 bench/scaling/tree_sweep_ranks.py [--build build] [--np 2] [--rounds 3]
 #       [--cases uniform:1e5:3,6,10 periodic:1e5:3,6,10 plummer:1e5:3,6,10]
-# Every candidate is one bench_scaling process (2 evaluations after a warm-up; the tuned one
-# after its tuning evaluations, which also warm it up longer); all candidates
-# of a case run in rotating order for --rounds rounds. Time: wall seconds per evaluation (the
+# Every candidate is one bench_scaling process: 2 timed evaluations after the same number of
+# untimed ones (the tuned tree: its tuning evaluations and one warm-up; every other candidate:
+# as many warm-ups, the tuning evaluations counted by a first run of the tuned one, not timed);
+# all candidates of a case run in rotating order for --rounds rounds. Time: wall seconds per evaluation (the
 # slowest rank). Prints a provenance line and one markdown row per case: automatic, tuned and
 # fastest swept tree, their median times, auto / best and tuned / best (medians over the rounds
 # of the per-round ratios; below 1: faster than every swept tree) and the tuning evaluations.
@@ -22,11 +23,12 @@ import sys
 import time
 
 
-def run(build, np, n, dist, order, how):
+def run(build, np, n, dist, order, how, warmups=1):
     env = dict(os.environ, OMP_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                OMPI_MCA_rmaps_base_oversubscribe="1")
     cmd = ["mpirun", "--bind-to", "none", "-np", str(np), "-x", "OMP_NUM_THREADS",
-           os.path.join(build, "bench", "scaling", "bench_scaling"), str(n), dist, str(order), "2", "0", how]
+           os.path.join(build, "bench", "scaling", "bench_scaling"), str(n), dist, str(order), "2", "0", how, "charges",
+           str(warmups)]
     out = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True).stdout
     return json.loads([l for l in out.splitlines() if l.startswith("{")][-1])
 
@@ -48,7 +50,8 @@ def main():
                                                     os.cpu_count(), platform.processor() or platform.machine(),
                                                     " ".join(load)))
     print("command: python3 bench/scaling/tree_sweep_ranks.py %s" % " ".join(sys.argv[1:]))
-    print("\nwall s per evaluation on %d ranks x 1 thread (slowest rank), medians of %d rounds\n" % (a.np, a.rounds))
+    print("\nwall s per evaluation on %d ranks x 1 thread (slowest rank), medians of %d rounds; every candidate "
+          "timed after as many untimed evaluations as the tuned tree (its tuning evaluations + 1)\n" % (a.np, a.rounds))
     print("| points | N | p | ranks | tree auto / tuned / best | depth auto / tuned / best | s auto / tuned / best "
           "| auto/best | tuned/best | candidates | tuning evaluations |")
     print("|---|---|---|---|---|---|---|---|---|---|---|")
@@ -61,11 +64,13 @@ def main():
                 hows += ["grid=%d" % k for k in (3, 4, 6, 8, 11, 16, 22) if 2 * k ** 3 <= n]
             times = {h: [] for h in hows}
             rows = {}
+            # the tuning evaluations, for the other candidates' warm-ups
+            warm = run(a.build, a.np, n, dist, order, "tuned")["tuning_evaluations"] + 1
             for r in range(a.rounds):
                 for k in range(len(hows)):
                     h = hows[(k + r) % len(hows)]
                     try:
-                        row = run(a.build, a.np, n, dist, order, h)
+                        row = run(a.build, a.np, n, dist, order, h, 1 if h == "tuned" else warm)
                     except subprocess.CalledProcessError:
                         times.pop(h, None)    # a grid beyond the memory bound, or no tree
                         continue

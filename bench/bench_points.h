@@ -84,7 +84,8 @@ inline Points read_charge_data(const std::string &path)
 }
 
 
-// The comma-separated items of a command-line value (empty items skipped), and as numbers.
+// The comma-separated items of a command-line value (empty items skipped), and as numbers
+// (an item "a-b" of two integers: a, a + 1, .., b).
 inline std::vector<std::string> split_list(const std::string &s)
 {
   std::vector<std::string> v;
@@ -97,7 +98,15 @@ inline std::vector<std::string> split_list(const std::string &s)
 inline std::vector<double> number_list(const std::string &s)
 {
   std::vector<double> v;
-  for (const std::string &t : split_list(s)) v.push_back(std::atof(t.c_str()));
+  for (const std::string &t : split_list(s)) {
+    const std::size_t dash = t.find('-');
+    if (dash != std::string::npos && dash > 0 && t.find_first_not_of("0123456789-") == std::string::npos) {
+      // a range of integers, "3-14"
+      for (int k = std::atoi(t.c_str()); k <= std::atoi(t.c_str() + dash + 1); ++k) v.push_back(k);
+    } else {
+      v.push_back(std::atof(t.c_str()));
+    }
+  }
   return v;
 }
 

@@ -14,7 +14,7 @@
 // tree is the swept tree of leaf L (same depth and modelled cost), whose times it takes.
 // "tuned": the tree kspace_style kifmm keeps after timing the trees near the automatic one
 // (kifmm::TreeTuner), and tuned / best as auto / best; "tuning evaluations": how many it timed
-// (the trees timed are printed on stderr).
+// (the trees timed by the tuning, and every timing of the sweep, are printed on stderr).
 //   bench_tree_sweep [--sets uniform,plummer,clusters] [--sizes 1e3,1e4,1e5] [--orders 3,6,9,12]
 //                    [--periodic] [--reps 3] [--min-time 0.2] [--factor 1.41] [--min-leaf 8]
 //                    [--data F.data,...]
@@ -189,6 +189,9 @@ void sweep(const Case &c, int order, bool periodic, int reps, double min_time, d
     for (std::size_t k = 0; k < m; ++k) {
       const std::size_t i = (k + r) % m;
       cands[i].times.push_back(time_evaluation(*evs[i], c.pts, pot, grad, min_time));
+      std::fprintf(stderr, "%s %zu p%d round %d: %s%s %.4g s (setup in the last evaluation %.3g s)\n", c.name.c_str(), n,
+                   order, r + 1, tree_label(cands[i].grid, cands[i].leaf).c_str(), i + 1 == m ? " (auto)" : "",
+                   cands[i].times.back(), evs[i]->stats().t_precompute);
     }
   // fastest swept tree by median; auto / best and tuned / best per round
   std::size_t best = 0;

@@ -3,7 +3,7 @@
 // kspace_style kifmm takes on one rank without a leaf size (kifmm::plan_tree, then
 // kifmm::choose_tree_from_points on the points), and every distinct tree of a sweep of leaf
 // sizes (8 .. 8192, factor --factor; leaf sizes that give the same tree as a smaller one are
-// timed once; --min-leaf skips the smaller ones); with periodic boundaries also every
+// timed once; --min-leaf and --max-leaf bound the sweep); with periodic boundaries also every
 // single-level grid of k^3 cells within the engine's memory bound (k = 3 .. max_grid_cells_long,
 // at every order) with at least 2 points per cell. Single-thread CPU time per N-body
 // evaluation (potential + gradient, sources =
@@ -17,6 +17,7 @@
 // (the trees timed by the tuning, and every timing of the sweep, are printed on stderr).
 //   bench_tree_sweep [--sets uniform,plummer,clusters] [--sizes 1e3,1e4,1e5] [--orders 3,6,9,12]
 //                    [--periodic] [--reps 3] [--min-time 0.2] [--factor 1.41] [--min-leaf 8]
+//                    [--max-leaf 8192]
 //                    [--data F.data,...]
 // Points: unittest/common/kifmm_point_sets.h (uniform in [-1,1]^3, Plummer sphere, two dense
 // clusters), or LAMMPS data files with "Atoms # charge" (id type q x y z). Periodic: the points
@@ -88,12 +89,12 @@ double time_evaluation(kifmm::Evaluator &ev, const bench::Points &p, std::vector
 // the swept trees: distinct trees only (same depth and modelled cost = same tree; seen maps
 // them to their leaf) and, periodic, every single-level grid within the engine's memory bound
 // with at least 2 points per cell on average
-std::vector<Candidate> swept_trees(const Case &c, const kifmm::Options &opt, double factor, double min_leaf,
+std::vector<Candidate> swept_trees(const Case &c, const kifmm::Options &opt, double factor, double min_leaf, double max_leaf,
                                    std::map<std::pair<int, double>, int> &seen)
 {
   const std::size_t n = c.pts.size();
   std::vector<Candidate> cands;
-  for (double leaf = 8; leaf <= 8192 && leaf <= 2.0 * n; leaf *= factor) {
+  for (double leaf = 8; leaf <= max_leaf && leaf <= 2.0 * n; leaf *= factor) {
     if (leaf < min_leaf) continue;
     const int l = (int) std::lround(leaf);
     const kifmm::TreeChoice m = kifmm::model_tree(kifmm::KernelSpec{}, opt, n, c.pts.xyz.data(), l);
@@ -143,7 +144,8 @@ kifmm::TreeChoice tuned_tree(const Case &c, const kifmm::TreeRequest &request, c
   return tuner.finish(ev);
 }
 
-void sweep(const Case &c, int order, bool periodic, int reps, double min_time, double factor, double min_leaf)
+void sweep(const Case &c, int order, bool periodic, int reps, double min_time, double factor, double min_leaf,
+           double max_leaf)
 {
   const std::size_t n = c.pts.size();
   kifmm::Options opt;
@@ -158,7 +160,7 @@ void sweep(const Case &c, int order, bool periodic, int reps, double min_time, d
   kifmm::Options autom = kifmm::plan_tree(opt, request).options;
   const kifmm::TreeChoice choice = kifmm::choose_tree_from_points(kifmm::KernelSpec{}, request, autom, n, c.pts.xyz.data());
   std::map<std::pair<int, double>, int> seen;
-  std::vector<Candidate> cands = swept_trees(c, opt, factor, min_leaf, seen);
+  std::vector<Candidate> cands = swept_trees(c, opt, factor, min_leaf, max_leaf, seen);
   // the automatic tree is the last candidate; when a swept tree is the same tree, auto / best
   // uses that candidate's times (the ratio of two timings of one tree only measures the noise)
   const int grid = autom.periodic_grid;
@@ -222,7 +224,7 @@ int main(int argc, char **argv)
   std::vector<double> sizes = {1e3, 1e4, 1e5}, orders = {3, 6, 9, 12};
   bool periodic = false;
   int reps = 3;
-  double min_time = 0.2, factor = 1.41, min_leaf = 8;
+  double min_time = 0.2, factor = 1.41, min_leaf = 8, max_leaf = 8192;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -238,6 +240,7 @@ int main(int argc, char **argv)
     else if (a == "--min-time") min_time = std::atof(next().c_str());
     else if (a == "--factor") factor = std::max(1.05, std::atof(next().c_str()));
     else if (a == "--min-leaf") min_leaf = std::atof(next().c_str());
+    else if (a == "--max-leaf") max_leaf = std::atof(next().c_str());
     else {
       std::fprintf(stderr, "bench_tree_sweep: unknown option %s\n", a.c_str());
       return 1;
@@ -266,7 +269,7 @@ int main(int argc, char **argv)
   std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
   for (auto &c : cases) {
     if (periodic) c.pts = bench::into_periodic_cell(c.pts);
-    for (double p : orders) sweep(c, (int) p, periodic, reps, min_time, factor, min_leaf);
+    for (double p : orders) sweep(c, (int) p, periodic, reps, min_time, factor, min_leaf, max_leaf);
   }
   return 0;
 }

@@ -5,9 +5,9 @@
 // sizes (8 .. 8192, factor --factor; leaf sizes that give the same tree as a smaller one are
 // timed once; --min-leaf and --max-leaf bound the sweep); with periodic boundaries also every
 // single-level grid of k^3 cells within the engine's memory bound (k = 3 .. max_grid_cells_long,
-// at every order) with at least 2 points per cell. Single-thread CPU time per N-body
-// evaluation (potential + gradient, sources =
-// targets), all candidates interleaved in rotating order for --reps rounds, each timed over at
+// at every order) with at least 2 and at most --max-leaf points per cell. Single-thread CPU
+// time per N-body evaluation (potential + gradient, sources = targets), all candidates
+// interleaved in rotating order for --reps rounds, each timed over at
 // least --min-time seconds. Printed per case: the automatic leaf and depth, the fastest swept
 // leaf and depth, their median times, and auto / best (median over the rounds of the per-round
 // ratios; 1.00 = the automatic tree is the fastest of the sweep). "leaf (= L)": the automatic
@@ -88,7 +88,7 @@ double time_evaluation(kifmm::Evaluator &ev, const bench::Points &p, std::vector
 
 // the swept trees: distinct trees only (same depth and modelled cost = same tree; seen maps
 // them to their leaf) and, periodic, every single-level grid within the engine's memory bound
-// with at least 2 points per cell on average
+// with at least 2 and at most max_leaf points per cell on average
 std::vector<Candidate> swept_trees(const Case &c, const kifmm::Options &opt, double factor, double min_leaf, double max_leaf,
                                    std::map<std::pair<int, double>, int> &seen)
 {
@@ -102,7 +102,7 @@ std::vector<Candidate> swept_trees(const Case &c, const kifmm::Options &opt, dou
   }
   if (opt.periodic)
     for (int k = 3; k <= kifmm::max_grid_cells_long(opt.order, nullptr) && (k == 3 || 2.0 * k * k * k <= n); ++k)
-      cands.push_back(Candidate{0, 1, {}, k});
+      if ((double) n <= max_leaf * k * k * k) cands.push_back(Candidate{0, 1, {}, k});
   return cands;
 }
 

@@ -8,10 +8,11 @@
 // at every order) with at least 2 and at most --max-leaf points per cell. Single-thread CPU
 // time per N-body evaluation (potential + gradient, sources = targets), all candidates
 // interleaved in rotating order for --reps rounds, each timed (after one untimed evaluation)
-// over at least --min-time seconds. Printed per case: the automatic leaf and depth, the fastest swept
-// leaf and depth, their median times, and auto / best (median over the rounds of the per-round
-// ratios; 1.00 = the automatic tree is the fastest of the sweep). "leaf (= L)": the automatic
-// tree is the swept tree of leaf L (same depth and modelled cost), whose times it takes.
+// over at least --min-time seconds. Printed per case: the automatic leaf and depth, the
+// fastest swept leaf and depth, their median times, and auto / best (median over the rounds of
+// the per-round ratios; 1.00 = the automatic tree is the fastest of the sweep). "leaf (= L)":
+// the automatic tree is the swept tree of leaf L (same depth and modelled cost), whose times it
+// takes.
 // "tuned": the tree kspace_style kifmm keeps after timing the trees near the automatic one
 // (kifmm::TreeTuner), and tuned / best as auto / best; "tuning evaluations": how many it timed
 // (the trees timed by the tuning, and every timing of the sweep, are printed on stderr).

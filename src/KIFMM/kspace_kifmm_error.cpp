@@ -227,7 +227,8 @@ void KSpaceKIFMM::check_error()
 // it exceeds the target (3/4 of the request: the sampled error is an estimate), the next order
 // is evaluated; while it is below half the target, the order below is tried. Without clumps, of
 // two orders the lower one's error is bounded by their difference over all atoms plus the
-// higher one's sampled error, compared with the request itself. Each order is evaluated on the
+// higher one's sampled error, compared with the request itself (when that bound misses only by
+// the higher order's error, again from the order above it). Each order is evaluated on the
 // tree chosen for it. The order settled on is where the next run of these settings starts.
 // Above the calibrated orders a warning gives the error that can be reached.
 void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::size_t &nsrc)
@@ -250,6 +251,7 @@ void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::s
     int nsamples;
     double target;
     MeasuredError m;
+    Step why = Step::raise;
     struct Kept {
       std::unique_ptr<kifmm::Evaluator> engine;
       kifmm::Options options;
@@ -277,18 +279,24 @@ void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::s
       ks.evaluate_points(want_potential, comm_time, nsrc);
       m = ks.measure_error(nsamples);
       if (ks.comm->me != 0) return m.worst();
-      if (order > from)
+      if (why == Step::raise)
         utils::logmesg(ks.lmp,
                        "  KIFMM order {} measured {:.3e} on these atoms > {:.3g} (3/4 of the request): "
                        "order {} measured {:.3e} ({})\n",
                        from, was, target, order, m.worst(), m.describe());
-      else
+      else if (why == Step::lower)
         utils::logmesg(ks.lmp,
                        "  KIFMM order {} measured {:.3e} on these atoms <= {:.3g} (half the target): "
                        "order {} measured {:.3e}\n",
                        from, was, 0.5 * target, order, m.worst());
+      else if (why == Step::bound)
+        utils::logmesg(ks.lmp, "  KIFMM order {} evaluated to bound the error of order {}: measured {:.3e}\n", order,
+                       from, m.worst());
+      else
+        utils::logmesg(ks.lmp, "  KIFMM back to order {}: measured {:.3e}\n", order, m.worst());
       return m.worst();
     }
+    void step(Step s) override { why = s; }
     void keep() override
     {
       kept.options = ks.engine->options();
@@ -350,7 +358,7 @@ void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::s
                      kset.accuracy, verified_error, engine_options.order, m.describe());
     else if (verified_error != m.worst())
       utils::logmesg(lmp,
-                     "  KIFMM order {} on {}: relative error at most {:.3e} (its difference to the next order "
+                     "  KIFMM order {} on {}: relative error at most {:.3e} (its difference to a higher order "
                      "over all atoms plus that order's sampled error; sampled at order {}: {}), requested {:.3g}\n",
                      engine_options.order, tree, verified_error, engine_options.order, m.describe(), kset.accuracy);
     else

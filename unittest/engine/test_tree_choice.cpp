@@ -452,3 +452,40 @@ TEST(OrderSearch, TheDifferenceOverAllPointsDecidesWhenAvailable)
   EXPECT_EQ(kifmm::search_order(w, {8, 1e-7}, 1e-5, 3, 9).order, 8);
   EXPECT_EQ(w.current, 8);
 }
+
+TEST(OrderSearch, ABoundMissedByTheHigherOrdersErrorIsTakenAgainFromTheOrderAbove)
+{
+  // request 1e-3. Order 4 sampled 1.7e-4 (true 5e-5): order 3 (true 9e-4) is tried; its bound
+  // from order 4, 8.5e-4 + 1.7e-4, misses the request while the difference alone meets it:
+  // bounded again from order 5 (sampled 1e-5), 8.9e-4 + 1e-5 = 9e-4, taken
+  ModelTrials t = tenfold(4);
+  t.error_of[3] = 9e-4;
+  t.error_of[4] = 1.7e-4;
+  t.error_of[5] = 1e-5;
+  t.true_of = {1, 1, 1, 9e-4, 5e-5, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9};
+  const kifmm::OrderFound f = kifmm::search_order(t, {4, 1.7e-4}, 1e-3, 3, 9);
+  EXPECT_EQ(f.order, 3);
+  EXPECT_NEAR(f.error, 9e-4, 1e-12);
+  EXPECT_EQ(t.measured, (std::vector<int>{3, 5}));
+  EXPECT_EQ(t.current, 3);
+  // the same with order 3 at 9.8e-4 and order 5's sample at 1e-4: 9.7e-4 + 1e-4 misses; back to
+  // order 4, evaluated again
+  ModelTrials u = t;
+  u.measured.clear();
+  u.current = 4;
+  u.true_of[3] = 9.8e-4;
+  u.error_of[5] = 1e-4;
+  const kifmm::OrderFound g = kifmm::search_order(u, {4, 1.7e-4}, 1e-3, 3, 9);
+  EXPECT_EQ(g.order, 4);
+  EXPECT_EQ(g.error, 1.7e-4);
+  EXPECT_EQ(u.measured, (std::vector<int>{3, 5, 4}));
+  EXPECT_EQ(u.current, 4);
+  // a difference above the request: order 3 misses without the order above
+  ModelTrials w = t;
+  w.measured.clear();
+  w.current = 4;
+  w.true_of[3] = 1.1e-3;
+  EXPECT_EQ(kifmm::search_order(w, {4, 1.7e-4}, 1e-3, 3, 9).order, 4);
+  EXPECT_EQ(w.measured, (std::vector<int>{3}));
+  EXPECT_EQ(w.current, 4);
+}

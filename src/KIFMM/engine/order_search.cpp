@@ -14,6 +14,18 @@ double lower_order_bound(double difference, double higher_error)
 {
   return difference >= 0 && higher_error >= 0 ? difference + higher_error : -1.0;
 }
+
+// the bound of the current evaluation's error from an evaluation at order `above`; the current
+// evaluation is kept and returned to
+double tighter_bound(OrderTrials &trials, int above)
+{
+  trials.keep();
+  trials.step(OrderTrials::Step::bound);
+  const double error = trials.measure(above);
+  const double bound = lower_order_bound(trials.difference_from_kept(), error);
+  trials.restore();
+  return bound;
+}
 }    // namespace
 
 OrderFound raise_order(OrderTrials &trials, OrderFound at, double request, int max_order)
@@ -21,6 +33,7 @@ OrderFound raise_order(OrderTrials &trials, OrderFound at, double request, int m
   const double target = order_search_margin * request;
   while (at.error > target && at.order < max_order) {
     trials.keep();
+    trials.step(OrderTrials::Step::raise);
     const OrderFound next{at.order + 1, trials.measure(at.order + 1)};
     // the sampled error of `at` may overestimate it: the bound over all points decides
     const double bound = lower_order_bound(trials.difference_from_kept(), next.error);
@@ -43,10 +56,23 @@ OrderFound search_order(OrderTrials &trials, OrderFound start, double request, i
   // acts on, e.g. a direct sum over few leaves: the order says nothing there, it is kept)
   while (at.order <= start.order && at.order > min_order && at.error >= 0 && at.error <= 0.5 * target) {
     trials.keep();
+    trials.step(OrderTrials::Step::lower);
     const OrderFound lower{at.order - 1, trials.measure(at.order - 1)};
     const bool same = std::fabs(lower.error - at.error) <= 1e-6 * at.error;
-    const double bound = lower_order_bound(trials.difference_from_kept(), at.error);
-    const bool meets = bound >= 0 ? bound <= request : lower.error >= 0 && lower.error <= target;
+    const double difference = trials.difference_from_kept();
+    double bound = lower_order_bound(difference, at.error);
+    bool meets = bound >= 0 ? bound <= request : lower.error >= 0 && lower.error <= target;
+    if (!meets && !same && bound >= 0 && difference <= request && at.order < max_order) {
+      // the difference alone meets the request and the bound misses it by the current order's
+      // error: bounded again against the order above, whose error is smaller
+      bound = tighter_bound(trials, at.order + 1);
+      meets = bound >= 0 && bound <= request;
+      if (!meets) {
+        trials.step(OrderTrials::Step::back);
+        trials.measure(at.order);    // the evaluation at at.order again (the kept one is lower's)
+        break;
+      }
+    }
     if (meets && !same) {
       at = OrderFound{lower.order, bound >= 0 ? bound : lower.error};
       continue;

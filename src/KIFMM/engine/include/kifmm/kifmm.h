@@ -437,13 +437,18 @@ constexpr double order_search_margin = 0.75;
 // RMS difference over ALL points between the current evaluation and the kept one, normalized as
 // the measured error (< 0: not available). Of two orders, the lower one's error is at most that
 // difference plus the higher one's error: a bound whose large term has no sampling noise.
+// step: why the next measure is made (for the caller's log): the order above, as the error
+// exceeds the target; the order below, as it is well within; the order above the current
+// evaluation, to bound the current one's error more tightly; the order the search returns to.
 class OrderTrials {
  public:
+  enum class Step { raise, lower, bound, back };
   virtual ~OrderTrials() = default;
   virtual double measure(int order) = 0;
   virtual void keep() = 0;
   virtual void restore() = 0;
   virtual double difference_from_kept() { return -1; }
+  virtual void step(Step) {}
 };
 struct OrderFound {
   int order;
@@ -460,8 +465,11 @@ OrderFound raise_order(OrderTrials &trials, OrderFound at, double request, int m
 // the difference when available, else its measured error below the margin) and its error
 // differs from the current one (equal errors: no expansions on this tree, the order is kept),
 // else the kept evaluation restored: the lowest order found to meet the request, one step at a
-// time. Each trial is the caller's evaluation at that order: on the tree the caller chooses for
-// it.
+// time. When the difference alone meets the request and the bound misses it by the current
+// order's error, the order below is bounded again from the order above the current one (whose
+// error is smaller): taken if that bound meets the request, else the current order evaluated
+// again. Each trial is the caller's evaluation at that order: on the tree the caller chooses
+// for it.
 OrderFound search_order(OrderTrials &trials, OrderFound start, double request, int min_order, int max_order);
 
 // ---- induced point dipoles (polarization.cpp)

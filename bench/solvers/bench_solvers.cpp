@@ -236,7 +236,6 @@ std::string fmtd(double v)
   return b;
 }
 
-
 struct Reference {
   int maxtag = 0;
   double f_rms = 0;    // RMS of |F| over the sampled atoms

@@ -673,7 +673,8 @@ int cmd_run(const Args &a)
   if (auto *kk = dynamic_cast<KSpaceKIFMM *>(lmp->force->kspace)) {
     const kifmm::Stats &st = kk->engine_stats();
     extra += ", \"tune_evaluations\": " + std::to_string(tune_evaluations) + ", \"t_tune\": " + fmtd(t_tune) +
-        ", \"leaf\": " + std::to_string(kk->engine_leaf_size()) + ", \"grid\": " + std::to_string(kk->engine_grid());
+        ", \"leaf\": " + std::to_string(kk->engine_leaf_size()) + ", \"grid\": " + std::to_string(kk->engine_grid()) +
+        ", \"order_used\": " + std::to_string(kk->engine_order());
     extra += ", \"depth\": " + std::to_string(st.depth) + ", \"leaves\": " +
         std::to_string(st.n_leaves) + ", \"operator_mb\": " + fmtd(st.operator_bytes / 1048576.0) +
         ", \"tree_mb\": " + fmtd(st.tree_bytes / 1048576.0);

@@ -96,6 +96,8 @@ class KSpaceKIFMM : public KSpace {
   void evaluate_dipole_points(bool want_potential, double &comm_time, std::size_t &nsrc);
   // force and torque of point k (torque zero without dipoles), its energy
   void point_force(std::size_t k, double prefactor, double f[3], double t[3]) const;
+  // the same from another evaluation's gradient g and (dipoles) Hessian h at point k
+  void point_force(std::size_t k, double prefactor, const double *g, const double *h, double f[3], double t[3]) const;
   double point_energy(std::size_t k, double prefactor) const;
   void dipole_virial(double prefactor, bool global, bool peratom);
   // induced dipoles (fix kifmm/polarize, KIFMMPolarization; kspace_kifmm_polarize.cpp): solved
@@ -128,6 +130,11 @@ class KSpaceKIFMM : public KSpace {
   };
   MeasuredError measure_error(int nsamples);
   MeasuredError measure_dipole_error(int nsamples);
+  MeasuredError clump_error(const std::vector<std::size_t> &pebbles, const std::vector<double> &a,
+                            const std::vector<double> &e);
+  // the current evaluation's difference from another of the same points (its gradients and,
+  // with dipoles, Hessians) over all of them, measured as the error is
+  MeasuredError difference_from(const std::vector<double> &g, const std::vector<double> &h);
   // the exact gradients at the last measurement's sample, reused by the next measurement of the
   // same step on the same atoms (the order search measures each order it tries on that sample)
   struct ExactReference {

@@ -128,14 +128,20 @@ void KSpaceKIFMM::evaluate_dipole_points(bool want_potential, double &comm_time,
 
 void KSpaceKIFMM::point_force(std::size_t k, double cf, double f[3], double t[3]) const
 {
+  point_force(k, cf, &grad[3 * k], dipoles ? &hess[6 * k] : nullptr, f, t);
+}
+
+void KSpaceKIFMM::point_force(std::size_t k, double cf, const double *g, const double *h, double f[3],
+                              double t[3]) const
+{
   const double s = strength[k];
   if (!dipoles) {
-    for (int d = 0; d < 3; ++d) f[d] = cf * s * grad[3 * k + d], t[d] = 0.0;
+    for (int d = 0; d < 3; ++d) f[d] = cf * s * g[d], t[d] = 0.0;
     return;
   }
   double gq[3];
-  charge_gradient(k, &grad[3 * k], gq);
-  dipole_force_torque(s, &moment[3 * k], gq, &grad[3 * k], &hess[6 * k], f, t);
+  charge_gradient(k, g, gq);
+  dipole_force_torque(s, &moment[3 * k], gq, g, h, f, t);
   for (int d = 0; d < 3; ++d) f[d] *= cf, t[d] *= cf;
 }
 

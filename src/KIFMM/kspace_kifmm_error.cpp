@@ -88,7 +88,8 @@ KSpaceKIFMM::MeasuredError KSpaceKIFMM::measure_error(int nsamples)
   for (std::size_t k = 0; k < n; ++k)
     if (is_free(k))
       for (int d = 0; d < 3; ++d) sums[2] += strength[k] * strength[k] * grad[3 * k + d] * grad[3 * k + d];
-  std::map<tagint, std::array<double, 12>> clump;    // dF, F, dtau, tau
+  std::vector<std::size_t> pebbles;
+  std::vector<double> pa, pe;    // evaluated and exact forces of the sampled pebbles
   for (std::size_t k = 0; k < sample.size(); ++k) {
     const std::size_t j = sample[k];
     const double s = strength[j];
@@ -105,15 +106,40 @@ KSpaceKIFMM::MeasuredError KSpaceKIFMM::measure_error(int nsamples)
       }
       continue;
     }
-    auto &c = clump.try_emplace(point_body[j]).first->second;
-    const double *r = &point_arm[3 * j];
-    const double df[3] = {a[0] - e[0], a[1] - e[1], a[2] - e[2]};
+    pebbles.push_back(j);
+    pa.insert(pa.end(), a, a + 3);
+    pe.insert(pe.end(), e, e + 3);
+  }
+
+  double tot[3];
+  bigint nfree = (bigint) (sample.size() - pebbles.size()), nfree_all = 0;
+  MPI_Allreduce(sums, tot, 3, MPI_DOUBLE, MPI_SUM, world);
+  MPI_Allreduce(&nfree, &nfree_all, 1, MPI_LMP_BIGINT, MPI_SUM, world);
+  MeasuredError m = clump_error(pebbles, pa, pe);
+  m.natoms = nfree_all;
+  // free atoms: the sample's squared error scaled to all of them over all their squared forces
+  if (nfree_all > 0)
+    m.atoms = kifmm::sampled_relative_error(tot[0], tot[1], (double) nfree_all, all[0], tot[2]);
+  return m;
+}
+
+// The relative RMS errors of the clumps' net forces and torques (about their centres of mass),
+// forces a against references e at pebbles of clumps (3 values per pebble; every rank its own,
+// summed per clump over ranks; collective). Only the clump fields of the result are set.
+KSpaceKIFMM::MeasuredError KSpaceKIFMM::clump_error(const std::vector<std::size_t> &pebbles,
+                                                     const std::vector<double> &a, const std::vector<double> &e)
+{
+  std::map<tagint, std::array<double, 12>> clump;    // dF, F, dtau, tau
+  for (std::size_t k = 0; k < pebbles.size(); ++k) {
+    auto &c = clump.try_emplace(point_body[pebbles[k]]).first->second;
+    const double *r = &point_arm[3 * pebbles[k]], *ek = &e[3 * k];
+    const double df[3] = {a[3 * k] - ek[0], a[3 * k + 1] - ek[1], a[3 * k + 2] - ek[2]};
     for (int d = 0; d < 3; ++d) {
       c[d] += df[d];
-      c[3 + d] += e[d];
+      c[3 + d] += ek[d];
     }
     const double dt[3] = {r[1] * df[2] - r[2] * df[1], r[2] * df[0] - r[0] * df[2], r[0] * df[1] - r[1] * df[0]};
-    const double t[3] = {r[1] * e[2] - r[2] * e[1], r[2] * e[0] - r[0] * e[2], r[0] * e[1] - r[1] * e[0]};
+    const double t[3] = {r[1] * ek[2] - r[2] * ek[1], r[2] * ek[0] - r[0] * ek[2], r[0] * ek[1] - r[1] * ek[0]};
     for (int d = 0; d < 3; ++d) {
       c[6 + d] += dt[d];
       c[9 + d] += t[d];
@@ -141,24 +167,52 @@ KSpaceKIFMM::MeasuredError KSpaceKIFMM::measure_error(int nsamples)
       csum[2] += c[6 + d] * c[6 + d];
       csum[3] += c[9 + d] * c[9 + d];
     }
-
-  double tot[3];
-  bigint nfree = (bigint) (sample.size()), nfree_all = 0;
-  for (std::size_t j : sample)
-    if (!is_free(j)) --nfree;
-  MPI_Allreduce(sums, tot, 3, MPI_DOUBLE, MPI_SUM, world);
-  MPI_Allreduce(&nfree, &nfree_all, 1, MPI_LMP_BIGINT, MPI_SUM, world);
   MeasuredError m;
-  m.natoms = nfree_all;
   m.nclumps = (bigint) whole.size();
-  // free atoms: the sample's squared error scaled to all of them over all their squared forces
-  if (nfree_all > 0)
-    m.atoms = kifmm::sampled_relative_error(tot[0], tot[1], (double) nfree_all, all[0], tot[2]);
   if (m.nclumps > 0) {
     m.clump_force = kifmm::relative_rms(csum[0], csum[1]);
     // clumps of one point (or all pebbles at the centre of mass) have no torque
     if (csum[3] > 0 || csum[2] > 0) m.clump_torque = kifmm::relative_rms(csum[2], csum[3]);
   }
+  return m;
+}
+
+// The current evaluation against another of the same points (gradients g and, with dipoles,
+// Hessians h), over all points: the forces of free atoms (with dipoles: of every point, and
+// their torques) and the net forces and torques of clumps, relative to the current values
+// (collective). Of two orders, the lower one's error is at most this plus the higher one's.
+KSpaceKIFMM::MeasuredError KSpaceKIFMM::difference_from(const std::vector<double> &g, const std::vector<double> &h)
+{
+  const std::size_t n = index.size();
+  const bool with_bodies = !dipoles && !point_body.empty();
+  double sums[4] = {0, 0, 0, 0}, tot[4];    // force: difference^2, value^2; torque the same
+  bigint nfree = 0, nfree_all = 0;
+  std::vector<std::size_t> pebbles;
+  std::vector<double> pa, pb;
+  for (std::size_t k = 0; k < n; ++k) {
+    double fa[3], ta[3], fb[3], tb[3];
+    point_force(k, 1.0, &grad[3 * k], dipoles ? &hess[6 * k] : nullptr, fa, ta);
+    point_force(k, 1.0, &g[3 * k], dipoles ? &h[6 * k] : nullptr, fb, tb);
+    if (with_bodies && point_body[k]) {
+      pebbles.push_back(k);
+      pa.insert(pa.end(), fa, fa + 3);
+      pb.insert(pb.end(), fb, fb + 3);
+      continue;
+    }
+    ++nfree;
+    for (int d = 0; d < 3; ++d) {
+      sums[0] += (fa[d] - fb[d]) * (fa[d] - fb[d]);
+      sums[1] += fa[d] * fa[d];
+      sums[2] += (ta[d] - tb[d]) * (ta[d] - tb[d]);
+      sums[3] += ta[d] * ta[d];
+    }
+  }
+  MPI_Allreduce(sums, tot, 4, MPI_DOUBLE, MPI_SUM, world);
+  MPI_Allreduce(&nfree, &nfree_all, 1, MPI_LMP_BIGINT, MPI_SUM, world);
+  MeasuredError m = dipoles ? MeasuredError{} : clump_error(pebbles, pa, pb);
+  m.natoms = nfree_all;
+  if (nfree_all > 0) m.atoms = kifmm::relative_rms(tot[0], tot[1]);
+  if (dipoles && (tot[3] > 0 || tot[2] > 0)) m.torques = kifmm::relative_rms(tot[2], tot[3]);
   return m;
 }
 
@@ -225,10 +279,11 @@ void KSpaceKIFMM::check_error()
 // First evaluation of a run whose order comes from the requested accuracy: the error measured
 // on these atoms (free atoms' forces, clumps' net forces and torques), kifmm::search_order. While
 // it exceeds the target (3/4 of the request: the sampled error is an estimate), the next order
-// is evaluated; while it is below half the target, the order below is tried. Without clumps, of
-// two orders the lower one's error is bounded by their difference over all atoms plus the
-// higher one's sampled error, compared with the request itself (when that bound misses only by
-// the higher order's error, again from the order above it). Each order is evaluated on the
+// is evaluated; while it is below half the target, the order below is tried. Of two orders the
+// lower one's error is bounded by their difference over all atoms (difference_from: forces,
+// torques of dipoles, clumps' net forces and torques) plus the higher one's sampled error,
+// compared with the request itself (when that bound misses only by the higher order's error,
+// again from the order above it). Each order is evaluated on the
 // tree chosen for it. The order settled on is where the next run of these settings starts.
 // Above the calibrated orders a warning gives the error that can be reached.
 void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::size_t &nsrc)
@@ -306,27 +361,15 @@ void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::s
       kept.hess = ks.hess;
       kept.m = m;
     }
-    // the free atoms' forces over all of them (none in clumps: their net forces and torques
-    // are measured on the sample only)
+    // the two evaluations' difference over all atoms, measured as the error is (forces of free
+    // atoms, torques of dipoles, net forces and torques of clumps)
     double difference_from_kept() override
     {
-      if (ks.dipoles) return -1;    // q grad is not the force of a dipole: the sampled errors decide
-      int mine_bodies = ks.point_body.empty() ? 0 : 1, any_bodies = 0;
-      MPI_Allreduce(&mine_bodies, &any_bodies, 1, MPI_INT, MPI_MAX, ks.world);
-      if (any_bodies) return -1;
-      double mine[2] = {0, 0}, all[2];
-      for (std::size_t k = 0; k < ks.index.size(); ++k)
-        for (int d = 0; d < 3; ++d) {
-          const double s = ks.strength[k], a = s * ks.grad[3 * k + d], b = s * kept.grad[3 * k + d];
-          mine[0] += (a - b) * (a - b);
-          mine[1] += a * a;
-        }
-      MPI_Allreduce(mine, all, 2, MPI_DOUBLE, MPI_SUM, ks.world);
-      const double d = kifmm::relative_rms(all[0], all[1]);
+      const MeasuredError d = ks.difference_from(kept.grad, kept.hess);
       if (ks.comm->me == 0)
-        utils::logmesg(ks.lmp, "  KIFMM orders {} and {} differ by {:.3e} over all atoms\n", kept.options.order,
-                       ks.engine_options.order, d);
-      return d;
+        utils::logmesg(ks.lmp, "  KIFMM orders {} and {} differ by {:.3e} over all atoms ({})\n", kept.options.order,
+                       ks.engine_options.order, d.worst(), d.describe());
+      return d.worst();
     }
     void restore() override
     {

@@ -19,6 +19,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <mpi.h>
 
 using namespace kifmm_test;
 
@@ -108,8 +109,10 @@ TEST_F(KSpaceDipoles, ForcesTorquesAndEnergyMeetTheRequest)
       if (bound >= 0) EXPECT_GE(1.01 * bound, std::max(ef, et)) << acc << " " << leaf;
       if (last_log.find("differ by") != std::string::npos) ++differences;
     }
-  // the order search took differences over all dipoles' forces and torques
-  EXPECT_GT(differences, 0);
+  // the order search took differences over all dipoles' forces and torques (the log is rank 0's)
+  int me = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &me);
+  if (me == 0) EXPECT_GT(differences, 0);
 }
 
 // a high explicit order: equal to the exact sum to 1e-9, pressure tensor included (the virial

@@ -191,7 +191,7 @@ KSpaceKIFMM::MeasuredError KSpaceKIFMM::difference_from(const std::vector<double
   std::vector<double> pa, pb;
   for (std::size_t k = 0; k < n; ++k) {
     double fa[3], ta[3], fb[3], tb[3];
-    point_force(k, 1.0, &grad[3 * k], dipoles ? &hess[6 * k] : nullptr, fa, ta);
+    point_force(k, 1.0, fa, ta);
     point_force(k, 1.0, &g[3 * k], dipoles ? &h[6 * k] : nullptr, fb, tb);
     if (with_bodies && point_body[k]) {
       pebbles.push_back(k);

@@ -13,9 +13,10 @@
 # summary (summary.md).
 # Options: --out DIR (results + plots), --doc FILE (summary page), --full FILE (full tables),
 #   --build DIR (default: build/ of this checkout, or $KIFMM_BUILD_DIR), --bin PATH (no build),
-#   --only CASE[,CASE], --max-n N, --force (rerun what the results file has), --report-only,
-#   --threads T (OMP_NUM_THREADS of the runs, default 1), --commit C (source commit of --bin,
-#   recorded in the results; default: this checkout's HEAD, "+dirty" if src/ has changes),
+#   --only CASE[,CASE], --max-n N, --min-n N, --force (rerun what the results file has),
+#   --report-only, --threads T (OMP_NUM_THREADS of the runs, default 1), --commit C (source
+#   commit of --bin, recorded in the results; default: this checkout's HEAD, "+dirty" if src/
+#   has changes),
 #   --solvers S[,S] (run only these solver names or specs, e.g. kifmm), --timeout SEC (per-run
 #   CPU limit of this invocation). Remeasuring kifmm on a new engine: move its runs out of
 #   results.jsonl into results/kifmm-COMMIT.jsonl (the report compares them), then
@@ -25,7 +26,7 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
 profile=full
 build="${KIFMM_BUILD_DIR:-$root/build}"
-out="" doc="" full="" bin="" only="" maxn="" force="" report_only=0 commit="" solvers="" timeout=""
+out="" doc="" full="" bin="" only="" maxn="" minn="" force="" report_only=0 commit="" solvers="" timeout=""
 threads="${OMP_NUM_THREADS:-1}"
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -38,6 +39,7 @@ while [ $# -gt 0 ]; do
     --bin) bin="$2"; shift ;;
     --only) only="$2"; shift ;;
     --max-n) maxn="$2"; shift ;;
+    --min-n) minn="$2"; shift ;;
     --threads) threads="$2"; shift ;;
     --force) force=--force ;;
     --report-only) report_only=1 ;;
@@ -83,7 +85,7 @@ if [ "$report_only" = 0 ]; then
   export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
   "$py" "$here/run_bench.py" --profile "$profile" --bin "$bin" --work "$work" \
     --results "$out/results.jsonl" --threads "$threads" --commit "$commit" --lmp "$lmp" ${only:+--only "$only"} \
-    ${maxn:+--max-n "$maxn"} ${solvers:+--solvers "$solvers"} ${timeout:+--timeout "$timeout"} \
+    ${maxn:+--max-n "$maxn"} ${minn:+--min-n "$minn"} ${solvers:+--solvers "$solvers"} ${timeout:+--timeout "$timeout"} \
     $force
 fi
 "$py" "$here/report.py" --profile "$profile" --results "$out/results.jsonl" --plots "$out" \

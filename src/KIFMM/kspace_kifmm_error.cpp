@@ -282,8 +282,8 @@ void KSpaceKIFMM::check_error()
 // is evaluated; while it is below half the target, the order below is tried. Of two orders the
 // lower one's error is bounded by their difference over all atoms (difference_from: forces,
 // torques of dipoles, clumps' net forces and torques) plus the higher one's sampled error,
-// compared with the request itself (when that bound misses only by the higher order's error,
-// again from the order above it). Each order is evaluated on the
+// compared with the request itself (when that bound misses and the difference minus the higher
+// order's error does not, again from the order above it). Each order is evaluated on the
 // tree chosen for it. The order settled on is where the next run of these settings starts.
 // Above the calibrated orders a warning gives the error that can be reached.
 void KSpaceKIFMM::verify_accuracy(bool want_potential, double &comm_time, std::size_t &nsrc)

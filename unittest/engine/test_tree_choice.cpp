@@ -343,7 +343,8 @@ struct ModelTrials : kifmm::OrderTrials {
   std::vector<double> true_of;     // the true error (empty: no difference available)
   std::vector<int> measured;
   int current = 0, kept = -1, restores = 0;
-  // the model's difference of two evaluations: their true errors apart (errors of one sign)
+  // the model's difference of two evaluations: their true errors apart (errors along one line,
+  // of either sign)
   double difference_from_kept() override
   {
     return true_of.empty() ? -1.0 : std::fabs(true_of.at(current) - true_of.at(kept));
@@ -480,12 +481,61 @@ TEST(OrderSearch, ABoundMissedByTheHigherOrdersErrorIsTakenAgainFromTheOrderAbov
   EXPECT_EQ(g.error, 1.7e-4);
   EXPECT_EQ(u.measured, (std::vector<int>{3, 5, 4}));
   EXPECT_EQ(u.current, 4);
-  // a difference above the request: order 3 misses without the order above
+  // a difference above the request by more than order 4's error: order 3 misses without the
+  // order above
   ModelTrials w = t;
   w.measured.clear();
   w.current = 4;
-  w.true_of[3] = 1.1e-3;
+  w.true_of[3] = 1.3e-3;
   EXPECT_EQ(kifmm::search_order(w, {4, 1.7e-4}, 1e-3, 3, 9).order, 4);
   EXPECT_EQ(w.measured, (std::vector<int>{3}));
+  EXPECT_EQ(w.current, 4);
+  // a difference above the request by less than order 4's error (the two errors of opposite
+  // signs): order 3 may meet it; from order 5, 9.7e-4 + 1e-5, it does
+  ModelTrials v = t;
+  v.measured.clear();
+  v.current = 4;
+  v.true_of[3] = 9.8e-4;
+  v.true_of[4] = -5e-5;
+  const kifmm::OrderFound h = kifmm::search_order(v, {4, 1.7e-4}, 1e-3, 3, 9);
+  EXPECT_EQ(h.order, 3);
+  EXPECT_NEAR(h.error, 9.8e-4, 1e-12);
+  EXPECT_EQ(v.measured, (std::vector<int>{3, 5}));
+  EXPECT_EQ(v.current, 3);
+}
+
+TEST(OrderSearch, RaisingBoundsTheLowerOrderAgainFromTheOrderAboveTheNext)
+{
+  // request 1e-3, start at order 3 sampled 1.001e-3 (over 3/4 of it): order 4 (sampled 1.7e-4)
+  // is evaluated; the bound of order 3 from it, 1.03e-3 + 1.7e-4, misses, the other side of the
+  // triangle, 1.03e-3 - 1.7e-4, does not: bounded again from order 5 (sampled 1e-5), 9.7e-4 +
+  // 1e-5, which meets it: order 3 kept, its evaluation restored
+  ModelTrials t = tenfold(3);
+  t.error_of[3] = 1.001e-3;
+  t.error_of[4] = 1.7e-4;
+  t.error_of[5] = 1e-5;
+  t.true_of = {1, 1, 1, 9.8e-4, -5e-5, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9};
+  const kifmm::OrderFound f = kifmm::search_order(t, {3, 1.001e-3}, 1e-3, 3, 9);
+  EXPECT_EQ(f.order, 3);
+  EXPECT_NEAR(f.error, 9.8e-4, 1e-12);
+  EXPECT_EQ(t.measured, (std::vector<int>{4, 5}));
+  EXPECT_EQ(t.current, 3);
+  // order 5's sample at 1e-4: 9.7e-4 + 1e-4 misses; order 4 evaluated again and kept
+  ModelTrials u = t;
+  u.measured.clear();
+  u.current = 3;
+  u.error_of[5] = 1e-4;
+  const kifmm::OrderFound g = kifmm::search_order(u, {3, 1.001e-3}, 1e-3, 3, 9);
+  EXPECT_EQ(g.order, 4);
+  EXPECT_EQ(g.error, 1.7e-4);
+  EXPECT_EQ(u.measured, (std::vector<int>{4, 5, 4}));
+  EXPECT_EQ(u.current, 4);
+  // the other side of the triangle misses too (difference 1.3e-3): order 4 without the order above
+  ModelTrials w = t;
+  w.measured.clear();
+  w.current = 3;
+  w.true_of[3] = 1.25e-3;
+  EXPECT_EQ(kifmm::search_order(w, {3, 1.001e-3}, 1e-3, 3, 9).order, 4);
+  EXPECT_EQ(w.measured, (std::vector<int>{4}));
   EXPECT_EQ(w.current, 4);
 }

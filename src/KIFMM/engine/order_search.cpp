@@ -15,6 +15,13 @@ double lower_order_bound(double difference, double higher_error)
   return difference >= 0 && higher_error >= 0 ? difference + higher_error : -1.0;
 }
 
+// whether the lower of two orders may meet the request: its error is at least their difference
+// minus the higher order's error (the other side of the triangle)
+bool may_meet(double difference, double higher_error, double request)
+{
+  return difference - higher_error <= request;
+}
+
 // the bound of the current evaluation's error from an evaluation at order `above`; the current
 // evaluation is kept and returned to
 double tighter_bound(OrderTrials &trials, int above)
@@ -34,12 +41,21 @@ OrderFound raise_order(OrderTrials &trials, OrderFound at, double request, int m
   while (at.error > target && at.order < max_order) {
     trials.keep();
     trials.step(OrderTrials::Step::raise);
-    const OrderFound next{at.order + 1, trials.measure(at.order + 1)};
+    OrderFound next{at.order + 1, trials.measure(at.order + 1)};
     // the sampled error of `at` may overestimate it: the bound over all points decides
-    const double bound = lower_order_bound(trials.difference_from_kept(), next.error);
+    const double difference = trials.difference_from_kept();
+    double bound = lower_order_bound(difference, next.error);
     if (bound >= 0 && bound <= request) {
       trials.restore();
       return OrderFound{at.order, bound};
+    }
+    if (bound >= 0 && may_meet(difference, next.error, request) && next.order < max_order) {
+      // bounded again from the order above `next`, whose error is smaller; else `next` again
+      trials.restore();
+      bound = tighter_bound(trials, next.order + 1);
+      if (bound >= 0 && bound <= request) return OrderFound{at.order, bound};
+      trials.step(OrderTrials::Step::back);
+      next.error = trials.measure(next.order);
     }
     at = next;
   }
@@ -62,9 +78,9 @@ OrderFound search_order(OrderTrials &trials, OrderFound start, double request, i
     const double difference = trials.difference_from_kept();
     double bound = lower_order_bound(difference, at.error);
     bool meets = bound >= 0 ? bound <= request : lower.error >= 0 && lower.error <= target;
-    if (!meets && !same && bound >= 0 && difference <= request && at.order < max_order) {
-      // the difference alone meets the request and the bound misses it by the current order's
-      // error: bounded again against the order above, whose error is smaller
+    if (!meets && !same && bound >= 0 && may_meet(difference, at.error, request) && at.order < max_order) {
+      // the bound misses the request, the other side of the triangle does not: bounded again
+      // against the order above, whose error is smaller
       bound = tighter_bound(trials, at.order + 1);
       meets = bound >= 0 && bound <= request;
       if (!meets) {

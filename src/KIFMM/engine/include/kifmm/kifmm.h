@@ -458,17 +458,20 @@ struct OrderFound {
 // order_search_margin * request (the sampled error is an estimate), up to max_order. When the
 // difference to the next order is available and the bound from it (difference + next order's
 // error) meets the request, the order is kept after all (its evaluation restored) with that
-// bound as its error.
+// bound as its error. When the bound misses the request and the other side of the triangle
+// (difference - next order's error) does not, the order is bounded again from the order above
+// the next one (whose error is smaller): kept if that bound meets the request, else the next
+// order evaluated again and the search goes on from it.
 OrderFound raise_order(OrderTrials &trials, OrderFound at, double request, int max_order);
 // raise_order, then, while the error is below half of order_search_margin * request, the order
 // below (not below min_order, not above start's), taken if it meets the request (the bound from
 // the difference when available, else its measured error below the margin) and its error
 // differs from the current one (equal errors: no expansions on this tree, the order is kept),
 // else the kept evaluation restored: the lowest order found to meet the request, one step at a
-// time. When the difference alone meets the request and the bound misses it by the current
-// order's error, the order below is bounded again from the order above the current one (whose
-// error is smaller): taken if that bound meets the request, else the current order evaluated
-// again. Each trial is the caller's evaluation at that order: on the tree the caller chooses
+// time. When the bound misses the request and the other side of the triangle (difference -
+// current order's error) does not, the order below is bounded again from the order above the
+// current one (whose error is smaller): taken if that bound meets the request, else the
+// current order evaluated again. Each trial is the caller's evaluation at that order: on the tree the caller chooses
 // for it.
 OrderFound search_order(OrderTrials &trials, OrderFound start, double request, int min_order, int max_order);
 

@@ -145,21 +145,23 @@ KSpaceKIFMM::MeasuredError KSpaceKIFMM::clump_error(const std::vector<std::size_
       c[9 + d] += t[d];
     }
   }
-  std::vector<double> rec;
+  // each clump's sums go to one rank (its tag modulo the ranks), which adds them up: a rank
+  // holds its own clumps and its share of all, not every clump
+  const int nranks = kcomm->size();
+  std::vector<std::vector<double>> send(nranks), recv;
   for (const auto &[tag, c] : clump) {
-    rec.push_back((double) tag);
-    rec.insert(rec.end(), c.begin(), c.end());
+    std::vector<double> &to = send[(std::size_t) (tag % nranks)];
+    to.push_back((double) tag);
+    to.insert(to.end(), c.begin(), c.end());
   }
-  std::vector<double> all_rec;
-  std::vector<int> counts;
-  kcomm->allgatherv(rec, all_rec, counts);
-  const std::size_t total = all_rec.size();
+  kcomm->alltoallv(send, recv);
   std::map<tagint, std::array<double, 12>> whole;
-  for (std::size_t k = 0; k + 13 <= total; k += 13) {
-    auto &c = whole.try_emplace((tagint) all_rec[k]).first->second;
-    for (int m = 0; m < 12; ++m) c[m] += all_rec[k + 1 + m];
-  }
-  double csum[4] = {0, 0, 0, 0};
+  for (const std::vector<double> &from : recv)
+    for (std::size_t k = 0; k + 13 <= from.size(); k += 13) {
+      auto &c = whole.try_emplace((tagint) from[k]).first->second;
+      for (int m = 0; m < 12; ++m) c[m] += from[k + 1 + m];
+    }
+  double csum[5] = {0, 0, 0, 0, (double) whole.size()};
   for (const auto &[tag, c] : whole)
     for (int d = 0; d < 3; ++d) {
       csum[0] += c[d] * c[d];
@@ -167,8 +169,9 @@ KSpaceKIFMM::MeasuredError KSpaceKIFMM::clump_error(const std::vector<std::size_
       csum[2] += c[6 + d] * c[6 + d];
       csum[3] += c[9 + d] * c[9 + d];
     }
+  kcomm->allreduce_sum(csum, 5);
   MeasuredError m;
-  m.nclumps = (bigint) whole.size();
+  m.nclumps = (bigint) csum[4];
   if (m.nclumps > 0) {
     m.clump_force = kifmm::relative_rms(csum[0], csum[1]);
     // clumps of one point (or all pebbles at the centre of mass) have no torque

@@ -370,6 +370,16 @@ ModelTrials tenfold(int current)
   t.current = current;
   return t;
 }
+// the same model with nothing measured yet, its evaluation in use at `current`
+ModelTrials fresh(const ModelTrials &t, int current)
+{
+  ModelTrials u = t;
+  u.measured.clear();
+  u.restores = 0;
+  u.kept = -1;
+  u.current = current;
+  return u;
+}
 }    // namespace
 
 TEST(OrderSearch, RaisesUntilTheTargetIsMet)
@@ -432,10 +442,8 @@ TEST(OrderSearch, TheDifferenceOverAllPointsDecidesWhenAvailable)
   EXPECT_EQ(t.restores, 1);
   EXPECT_EQ(t.current, 6);
   // without the difference the sample decides: order 7
-  ModelTrials s = t;
+  ModelTrials s = fresh(t, 6);
   s.true_of.clear();
-  s.measured.clear();
-  s.current = 6;
   EXPECT_EQ(kifmm::search_order(s, {6, 9e-6}, 1e-5, 3, 9).order, 7);
   // lowering: at order 8 (sampled 1e-7), order 7 sampled 9e-6 (over 3/4 of the request) but its
   // bound 3e-6 + 1e-7 meets it: taken; order 6's bound 4e-5 + 3e-6 misses: back to 7
@@ -471,9 +479,7 @@ TEST(OrderSearch, ABoundMissedByTheHigherOrdersErrorIsTakenAgainFromTheOrderAbov
   EXPECT_EQ(t.current, 3);
   // the same with order 3 at 9.8e-4 and order 5's sample at 1e-4: 9.7e-4 + 1e-4 misses; back to
   // order 4, evaluated again
-  ModelTrials u = t;
-  u.measured.clear();
-  u.current = 4;
+  ModelTrials u = fresh(t, 4);
   u.true_of[3] = 9.8e-4;
   u.error_of[5] = 1e-4;
   const kifmm::OrderFound g = kifmm::search_order(u, {4, 1.7e-4}, 1e-3, 3, 9);
@@ -483,18 +489,14 @@ TEST(OrderSearch, ABoundMissedByTheHigherOrdersErrorIsTakenAgainFromTheOrderAbov
   EXPECT_EQ(u.current, 4);
   // a difference above the request by more than order 4's error: order 3 misses without the
   // order above
-  ModelTrials w = t;
-  w.measured.clear();
-  w.current = 4;
+  ModelTrials w = fresh(t, 4);
   w.true_of[3] = 1.3e-3;
   EXPECT_EQ(kifmm::search_order(w, {4, 1.7e-4}, 1e-3, 3, 9).order, 4);
   EXPECT_EQ(w.measured, (std::vector<int>{3}));
   EXPECT_EQ(w.current, 4);
   // a difference above the request by less than order 4's error (the two errors of opposite
   // signs): order 3 may meet it; from order 5, 9.7e-4 + 1e-5, it does
-  ModelTrials v = t;
-  v.measured.clear();
-  v.current = 4;
+  ModelTrials v = fresh(t, 4);
   v.true_of[3] = 9.8e-4;
   v.true_of[4] = -5e-5;
   const kifmm::OrderFound h = kifmm::search_order(v, {4, 1.7e-4}, 1e-3, 3, 9);
@@ -521,9 +523,7 @@ TEST(OrderSearch, RaisingBoundsTheLowerOrderAgainFromTheOrderAboveTheNext)
   EXPECT_EQ(t.measured, (std::vector<int>{4, 5}));
   EXPECT_EQ(t.current, 3);
   // order 5's sample at 1e-4: 9.7e-4 + 1e-4 misses; order 4 evaluated again and kept
-  ModelTrials u = t;
-  u.measured.clear();
-  u.current = 3;
+  ModelTrials u = fresh(t, 3);
   u.error_of[5] = 1e-4;
   const kifmm::OrderFound g = kifmm::search_order(u, {3, 1.001e-3}, 1e-3, 3, 9);
   EXPECT_EQ(g.order, 4);
@@ -531,9 +531,7 @@ TEST(OrderSearch, RaisingBoundsTheLowerOrderAgainFromTheOrderAboveTheNext)
   EXPECT_EQ(u.measured, (std::vector<int>{4, 5, 4}));
   EXPECT_EQ(u.current, 4);
   // the other side of the triangle misses too (difference 1.3e-3): order 4 without the order above
-  ModelTrials w = t;
-  w.measured.clear();
-  w.current = 3;
+  ModelTrials w = fresh(t, 3);
   w.true_of[3] = 1.25e-3;
   EXPECT_EQ(kifmm::search_order(w, {3, 1.001e-3}, 1e-3, 3, 9).order, 4);
   EXPECT_EQ(w.measured, (std::vector<int>{4}));

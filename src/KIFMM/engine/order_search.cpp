@@ -22,16 +22,21 @@ bool may_meet(double difference, double higher_error, double request)
   return difference - higher_error <= request;
 }
 
-// the bound of the current evaluation's error from an evaluation at order `above`; the current
-// evaluation is kept and returned to
-double tighter_bound(OrderTrials &trials, int above)
+// the current evaluation (an order below `higher`) bounded again from an evaluation at the order
+// above `higher` (the current one kept and returned to): that bound when it meets the request,
+// else < 0 and `higher` evaluated again (its error into higher_error when given)
+double bound_from_above(OrderTrials &trials, int higher, double request, double *higher_error)
 {
   trials.keep();
   trials.step(OrderTrials::Step::bound);
-  const double error = trials.measure(above);
+  const double error = trials.measure(higher + 1);
   const double bound = lower_order_bound(trials.difference_from_kept(), error);
   trials.restore();
-  return bound;
+  if (bound >= 0 && bound <= request) return bound;
+  trials.step(OrderTrials::Step::back);
+  const double again = trials.measure(higher);
+  if (higher_error) *higher_error = again;
+  return -1.0;
 }
 }    // namespace
 
@@ -52,10 +57,8 @@ OrderFound raise_order(OrderTrials &trials, OrderFound at, double request, int m
     if (bound >= 0 && may_meet(difference, next.error, request) && next.order < max_order) {
       // bounded again from the order above `next`, whose error is smaller; else `next` again
       trials.restore();
-      bound = tighter_bound(trials, next.order + 1);
-      if (bound >= 0 && bound <= request) return OrderFound{at.order, bound};
-      trials.step(OrderTrials::Step::back);
-      next.error = trials.measure(next.order);
+      bound = bound_from_above(trials, next.order, request, &next.error);
+      if (bound >= 0) return OrderFound{at.order, bound};
     }
     at = next;
   }
@@ -80,14 +83,11 @@ OrderFound search_order(OrderTrials &trials, OrderFound start, double request, i
     bool meets = bound >= 0 ? bound <= request : lower.error >= 0 && lower.error <= target;
     if (!meets && !same && bound >= 0 && may_meet(difference, at.error, request) && at.order < max_order) {
       // the bound misses the request, the other side of the triangle does not: bounded again
-      // against the order above, whose error is smaller
-      bound = tighter_bound(trials, at.order + 1);
-      meets = bound >= 0 && bound <= request;
-      if (!meets) {
-        trials.step(OrderTrials::Step::back);
-        trials.measure(at.order);    // the evaluation at at.order again (the kept one is lower's)
-        break;
-      }
+      // against the order above, whose error is smaller (else at.order evaluated again: the
+      // kept evaluation is lower's)
+      bound = bound_from_above(trials, at.order, request, nullptr);
+      meets = bound >= 0;
+      if (!meets) break;
     }
     if (meets && !same) {
       at = OrderFound{lower.order, bound >= 0 ? bound : lower.error};

@@ -471,8 +471,8 @@ OrderFound raise_order(OrderTrials &trials, OrderFound at, double request, int m
 // time. When the bound misses the request and the other side of the triangle (difference -
 // current order's error) does not, the order below is bounded again from the order above the
 // current one (whose error is smaller): taken if that bound meets the request, else the
-// current order evaluated again. Each trial is the caller's evaluation at that order: on the tree the caller chooses
-// for it.
+// current order evaluated again. Each trial is the caller's evaluation at that order: on the
+// tree the caller chooses for it.
 OrderFound search_order(OrderTrials &trials, OrderFound start, double request, int min_order, int max_order);
 
 // ---- induced point dipoles (polarization.cpp)

@@ -5,7 +5,10 @@
 // sizes (8 .. 8192, factor --factor; leaf sizes that give the same tree as a smaller one are
 // timed once; --min-leaf and --max-leaf bound the sweep); with periodic boundaries also every
 // single-level grid of k^3 cells within the engine's memory bound (k = 3 .. max_grid_cells_long,
-// at every order) with at least 2 and at most --max-leaf points per cell. Single-thread CPU
+// at every order) with at least 2 and at most --max-leaf points per cell on average and, with
+// --max-model-ratio R, a modelled cost at most R times the least modelled cost of the swept
+// trees (on clustered points at 1e6 the coarse grids put 1e4-1e5 points into one cell, whose
+// near field takes many minutes per evaluation; the model counts those pairs). Single-thread CPU
 // time per N-body evaluation (potential + gradient, sources = targets), all candidates
 // interleaved in rotating order for --reps rounds, each timed (after one untimed evaluation)
 // over at least --min-time seconds. Printed per case: the automatic leaf and depth, the
@@ -18,7 +21,7 @@
 // (the trees timed by the tuning, and every timing of the sweep, are printed on stderr).
 //   bench_tree_sweep [--sets uniform,plummer,clusters] [--sizes 1e3,1e4,1e5] [--orders 3,6,9,12]
 //                    [--periodic] [--reps 3] [--min-time 0.2] [--factor 1.41] [--min-leaf 8]
-//                    [--max-leaf 8192]
+//                    [--max-leaf 8192] [--max-model-ratio R]
 //                    [--data F.data,...]
 // Points: unittest/common/kifmm_point_sets.h (uniform in [-1,1]^3, Plummer sphere, two dense
 // clusters), or LAMMPS data files with "Atoms # charge" (id type q x y z). Periodic: the points
@@ -33,6 +36,7 @@
 #include <cstring>
 #include <ctime>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <stdexcept>
@@ -67,6 +71,12 @@ std::string tree_label(int grid, int leaf)
   return grid > 0 ? "grid " + std::to_string(grid) + "^3" : std::to_string(leaf);
 }
 
+// the bounds of the sweep
+struct Range {
+  double factor = 1.41, min_leaf = 8, max_leaf = 8192;
+  double max_model_ratio = 0;    // > 0: grids modelled dearer than this times the least left out
+};
+
 struct Case {
   std::string name;
   bench::Points pts;
@@ -92,21 +102,38 @@ double time_evaluation(kifmm::Evaluator &ev, const bench::Points &p, std::vector
 
 // the swept trees: distinct trees only (same depth and modelled cost = same tree; seen maps
 // them to their leaf) and, periodic, every single-level grid within the engine's memory bound
-// with at least 2 and at most max_leaf points per cell on average
-std::vector<Candidate> swept_trees(const Case &c, const kifmm::Options &opt, double factor, double min_leaf, double max_leaf,
+// with at least 2 and at most max_leaf points per cell on average (and, with max_model_ratio,
+// modelled at most that many times the least modelled cost of the swept trees)
+std::vector<Candidate> swept_trees(const Case &c, const kifmm::Options &opt, const Range &range,
                                    std::map<std::pair<int, double>, int> &seen)
 {
   const std::size_t n = c.pts.size();
   std::vector<Candidate> cands;
-  for (double leaf = 8; leaf <= max_leaf && leaf <= 2.0 * n; leaf *= factor) {
-    if (leaf < min_leaf) continue;
+  double least = std::numeric_limits<double>::infinity();
+  for (double leaf = 8; leaf <= range.max_leaf && leaf <= 2.0 * n; leaf *= range.factor) {
+    if (leaf < range.min_leaf) continue;
     const int l = (int) std::lround(leaf);
     const kifmm::TreeChoice m = kifmm::model_tree(kifmm::KernelSpec{}, opt, n, c.pts.xyz.data(), l);
+    least = std::min(least, m.cost);
     if (seen.emplace(std::make_pair(m.depth, m.cost), l).second) cands.push_back(Candidate{l, m.depth, {}});
   }
-  if (opt.periodic)
-    for (int k = 3; k <= kifmm::max_grid_cells_long(opt.order, nullptr) && (k == 3 || 2.0 * k * k * k <= n); ++k)
-      if ((double) n <= max_leaf * k * k * k) cands.push_back(Candidate{0, 1, {}, k});
+  if (!opt.periodic) return cands;
+  std::map<int, double> grid_cost;
+  if (range.max_model_ratio > 0)
+    for (const kifmm::TreeChoice &g : kifmm::model_grids(kifmm::KernelSpec{}, opt, n, c.pts.xyz.data(), false)) {
+      grid_cost[g.grid] = g.cost;
+      least = std::min(least, g.cost);
+    }
+  for (int k = 3; k <= kifmm::max_grid_cells_long(opt.order, nullptr) && (k == 3 || 2.0 * k * k * k <= n); ++k) {
+    if ((double) n > range.max_leaf * k * k * k) continue;
+    const auto g = grid_cost.find(k);
+    if (range.max_model_ratio > 0 && g != grid_cost.end() && g->second > range.max_model_ratio * least) {
+      std::fprintf(stderr, "%s %zu p%d: grid %d^3 left out (modelled %.4g s, %.3g times the least)\n", c.name.c_str(), n,
+                   opt.order, k, g->second, g->second / least);
+      continue;
+    }
+    cands.push_back(Candidate{0, 1, {}, k});
+  }
   return cands;
 }
 
@@ -148,8 +175,7 @@ kifmm::TreeChoice tuned_tree(const Case &c, const kifmm::TreeRequest &request, c
   return tuner.finish(ev);
 }
 
-void sweep(const Case &c, int order, bool periodic, int reps, double min_time, double factor, double min_leaf,
-           double max_leaf)
+void sweep(const Case &c, int order, bool periodic, int reps, double min_time, const Range &range)
 {
   const std::size_t n = c.pts.size();
   kifmm::Options opt;
@@ -164,7 +190,7 @@ void sweep(const Case &c, int order, bool periodic, int reps, double min_time, d
   kifmm::Options autom = kifmm::plan_tree(opt, request).options;
   const kifmm::TreeChoice choice = kifmm::choose_tree_from_points(kifmm::KernelSpec{}, request, autom, n, c.pts.xyz.data());
   std::map<std::pair<int, double>, int> seen;
-  std::vector<Candidate> cands = swept_trees(c, opt, factor, min_leaf, max_leaf, seen);
+  std::vector<Candidate> cands = swept_trees(c, opt, range, seen);
   // the automatic tree is the last candidate; when a swept tree is the same tree, auto / best
   // uses that candidate's times (the ratio of two timings of one tree only measures the noise)
   const int grid = autom.periodic_grid;
@@ -228,7 +254,8 @@ int main(int argc, char **argv)
   std::vector<double> sizes = {1e3, 1e4, 1e5}, orders = {3, 6, 9, 12};
   bool periodic = false;
   int reps = 3;
-  double min_time = 0.2, factor = 1.41, min_leaf = 8, max_leaf = 8192;
+  double min_time = 0.2;
+  Range range;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -242,9 +269,10 @@ int main(int argc, char **argv)
     else if (a == "--periodic") periodic = true;
     else if (a == "--reps") reps = std::max(1, std::atoi(next().c_str()));
     else if (a == "--min-time") min_time = std::atof(next().c_str());
-    else if (a == "--factor") factor = std::max(1.05, std::atof(next().c_str()));
-    else if (a == "--min-leaf") min_leaf = std::atof(next().c_str());
-    else if (a == "--max-leaf") max_leaf = std::atof(next().c_str());
+    else if (a == "--factor") range.factor = std::max(1.05, std::atof(next().c_str()));
+    else if (a == "--min-leaf") range.min_leaf = std::atof(next().c_str());
+    else if (a == "--max-leaf") range.max_leaf = std::atof(next().c_str());
+    else if (a == "--max-model-ratio") range.max_model_ratio = std::atof(next().c_str());
     else {
       std::fprintf(stderr, "bench_tree_sweep: unknown option %s\n", a.c_str());
       return 1;
@@ -273,7 +301,7 @@ int main(int argc, char **argv)
   std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
   for (auto &c : cases) {
     if (periodic) c.pts = bench::into_periodic_cell(c.pts);
-    for (double p : orders) sweep(c, (int) p, periodic, reps, min_time, factor, min_leaf, max_leaf);
+    for (double p : orders) sweep(c, (int) p, periodic, reps, min_time, range);
   }
   return 0;
 }

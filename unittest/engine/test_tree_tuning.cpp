@@ -1,7 +1,8 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Tuning the tree by timing (kifmm::TreeTuner): the walk along the ladders of octrees and
 // single-level grids on given times (it reaches the fastest tree, also across a bump within the
-// flat tolerance, keeps the tree in use within the margin, tunes nothing that was given), and
+// flat tolerance, keeps the tree in use within the margin, does not time trees modelled far
+// slower than it, tunes nothing that was given), and
 // real evaluations during tuning, whose results must all be as accurate as the modelled
 // choice's (open: direct sum; periodic: Ewald).
 #include "cost_model.h"
@@ -139,6 +140,39 @@ TEST(TreeTuning, KeepsTheTreeInUseWithinTheMargin)
     const int expected = std::min(kifmm::kTuneRepeats, (int) std::ceil(kifmm::kTuneMinSeconds / t - 1e-9));
     for (const auto &c : fast.timed()) EXPECT_EQ(c.evaluations, 1 + expected) << t;    // 1: the warm-up
   }
+}
+
+TEST(TreeTuning, DoesNotTimeTreesModelledFarSlower)
+{
+  // on the points: towards smaller leaves, the ladder's distinct trees (as tree_tuning.cpp
+  // builds it) up to the first one modelled beyond kTuneModelled times the tree in use; the
+  // times fall towards that one, which the walk does not time, so it stops next to it
+  const std::size_t n = 200000;
+  const Points p = uniform_cube(n, 11);
+  kifmm::Options o;
+  o.order = 6;
+  const kifmm::TreeRequest request{n, 0, 0, false};
+  o = kifmm::plan_tree(o, request).options;
+  kifmm::choose_tree_from_points(KernelSpec{}, request, o, n, p.xyz.data());
+  const kifmm::TreeChoice in_use = kifmm::model_tree(KernelSpec{}, o, n, p.xyz.data(), o.leaf_size);
+  const double limit = kifmm::kTuneModelled * in_use.cost;
+  std::vector<kifmm::TreeChoice> below{in_use};
+  double leaf = o.leaf_size;
+  for (int step = 0; step < 16 && below.size() < 5 && below.back().cost <= limit; ++step) {
+    leaf /= std::sqrt(2.0);
+    const kifmm::TreeChoice c = kifmm::model_tree(KernelSpec{}, o, n, p.xyz.data(), (int) std::lround(leaf));
+    if (c.depth != below.back().depth || c.cost != below.back().cost) below.push_back(c);
+  }
+  ASSERT_GT(below.back().cost, limit);    // a tree beyond the limit within the ladder's reach
+  ASSERT_GE(below.size(), 3u);            // and one between (a walk to time)
+  const int far = below.back().leaf_size, stop = below[below.size() - 2].leaf_size;
+  kifmm::TreeTuner tuner(KernelSpec{}, request, o, n, p.xyz.data());
+  ASSERT_TRUE(tuner.tuning());
+  const kifmm::TreeChoice t = tune_on(tuner, o, [&](const kifmm::Options &x) {
+    return 1.0 + 0.1 * std::abs(std::log((double) x.leaf_size / far));
+  });
+  for (const auto &c : tuner.timed()) EXPECT_LE(c.tree.cost, limit) << "leaf " << c.tree.leaf_size;
+  EXPECT_EQ(t.leaf_size, stop);
 }
 
 TEST(TreeTuning, GivenTreesAreNotTuned)

@@ -79,6 +79,9 @@ TreeTuner::TreeTuner(const KernelSpec &kernel, const TreeRequest &request, const
   }
   if (at == ladders_[first].size() || ladders_[0].size() + ladders_[1].size() < 2) return;
   first_ladder_ = first;
+  // on the points only: the uniform ladders (xyz null) miss by more on clustered atoms
+  const double in_use_cost = ladders_[first][at].tree.cost;
+  cost_limit_ = xyz && in_use_cost > 0 ? kTuneModelled * in_use_cost : std::numeric_limits<double>::infinity();
   const std::vector<Rung> &other = ladders_[1 - first];
   if (!other.empty()) {
     const auto least = std::min_element(other.begin(), other.end(),
@@ -142,7 +145,8 @@ void TreeTuner::reject(std::unique_ptr<Evaluator> &ev)
 }
 
 // the untimed neighbour of the ladder's fastest tree, or of a tree within kTuneFlat of it (a
-// flat stretch of the ladder, where the timings' noise would stop the walk short), if any
+// flat stretch of the ladder, where the timings' noise would stop the walk short), if any and
+// if modelled within cost_limit_
 bool TreeTuner::walk(int ladder)
 {
   std::vector<Rung> &rungs = ladders_[ladder];
@@ -155,7 +159,7 @@ bool TreeTuner::walk(int ladder)
   for (long r = 0; r < (long) rungs.size(); ++r) {
     if (r != best && (rungs[r].timed < 0 || !(timed_[rungs[r].timed].least <= flat))) continue;
     for (long nb : {r - 1, r + 1})
-      if (nb >= 0 && nb < (long) rungs.size() && rungs[nb].timed < 0) {
+      if (nb >= 0 && nb < (long) rungs.size() && rungs[nb].timed < 0 && !(rungs[nb].tree.cost > cost_limit_)) {
         start(ladder, (std::size_t) nb);
         return true;
       }

@@ -352,7 +352,11 @@ TreeChoice choose_tree_from_points(const KernelSpec &kernel, const TreeRequest &
 // neighbour until both neighbours of the fastest are slower, and of every tree within kTuneFlat
 // of the fastest (flat stretches and bumps of a few per cent, where noise would stop the walk);
 // then the same on the other ladder from its tree of least modelled cost, when that is within
-// kTuneOtherLadder of the tree in use's modelled cost. Each tree is timed after one evaluation
+// kTuneOtherLadder of the tree in use's modelled cost. On the points (xyz given), a tree
+// modelled at more than kTuneModelled times the tree in use's cost is not timed (slower by more
+// than the model's misses; deep trees at high orders take gigabytes); the uniform ladders of
+// several ranks (xyz null) are walked without this limit, their model misses more on
+// clustered atoms. Each tree is timed after one evaluation
 // that warms it up (first-touch memory; not timed) on two evaluations or more, until they add
 // up to kTuneMinSeconds (at most kTuneRepeats; the least counts, as the least disturbed by
 // other work on the machine; one when it already takes kTuneSlower times the fastest so far),
@@ -372,6 +376,7 @@ TreeChoice choose_tree_from_points(const KernelSpec &kernel, const TreeRequest &
 // nor kept, and ev becomes the first tree's evaluator, for the caller to evaluate again.
 // When tuning() is false, finish(ev) makes ev the fastest tree's evaluator and returns that tree.
 constexpr double kTuneOtherLadder = 1.6;
+constexpr double kTuneModelled = 2.0;
 constexpr double kTuneSlower = 1.5;
 constexpr int kTuneTrees = 12;
 constexpr double kTuneMinSeconds = 0.05;
@@ -416,6 +421,7 @@ class TreeTuner {
   std::size_t rung_ = 0;
   int first_ladder_ = 0;
   long other_start_ = -1;           // the other ladder's start (-1: not searched)
+  double cost_limit_ = 0;           // modelled cost above which a tree is not timed
   std::size_t in_use_ = 0;          // index in timed_ of the evaluator in use
   int evaluations_ = 0;
   bool done_ = true;

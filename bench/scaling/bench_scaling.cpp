@@ -1,11 +1,16 @@
 // This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
 // Strong-scaling benchmark of the distributed evaluation (engine level, no LAMMPS):
-//   mpirun -np P bench_scaling N [uniform|periodic|plummer] [order] [reps] [top_level]
+//   mpirun -np P bench_scaling N [uniform|periodic|plummer|clusters|periodic_plummer|periodic_clusters]
+//          [order] [reps] [top_level]
 //          [choice|tuned|leaf=M|grid=K|-] [charges|dipoles] [warm-ups]
 // Each rank makes only its own points: uniform in its brick of a P-brick decomposition of
 // [-1,1]^3 (as LAMMPS's processor grid; periodic: the same points, [-1,1]^3 is the periodic
 // cell, Laplace with its background term), or, for plummer, the points of a Plummer sphere in its
-// brick (every rank draws the same sequence and keeps its own; N <= 1e6). Prints one JSON line
+// brick (every rank draws the same sequence and keeps its own; N <= 1e6); clusters: the two
+// Gaussian clusters of the engine tests (bricks of their bounding box, the processor grid of
+// least sub-domain surface for its extents, as LAMMPS chooses it); periodic_plummer and
+// periodic_clusters: the Plummer sphere and the two clusters scaled into the periodic cell
+// [-1,1]^3, charges shifted to a zero sum (as bench_tree_sweep --periodic). Prints one JSON line
 // (rank 0): wall time per evaluation (max over ranks), CPU seconds per evaluation (sum over
 // ranks), phases (max over ranks), bytes sent per rank and ghost points per rank (min/avg/max).
 // "dipoles": every point also carries a random dipole moment (evaluate_dipoles_distributed,
@@ -39,8 +44,9 @@ double cpu_seconds()
   return u.ru_utime.tv_sec + 1e-6 * u.ru_utime.tv_usec + u.ru_stime.tv_sec + 1e-6 * u.ru_stime.tv_usec;
 }
 
-// processor grid px*py*pz = P as close to a cube as possible (LAMMPS picks the same for a cube)
-void grid(int P, int g[3])
+// processor grid px*py*pz = P of least sub-domain surface for a box of extents L (LAMMPS
+// chooses it so; a cube: as close to a cube as possible)
+void grid(int P, int g[3], const double L[3])
 {
   double best = 1e300;
   for (int a = 1; a <= P; ++a)
@@ -48,7 +54,8 @@ void grid(int P, int g[3])
       for (int b = 1; b <= P / a; ++b)
         if ((P / a) % b == 0) {
           const int c = P / a / b;
-          const double s = (double) a * b + (double) b * c + (double) a * c;
+          const double s = L[0] * L[1] / ((double) a * b) + L[1] * L[2] / ((double) b * c) +
+              L[0] * L[2] / ((double) a * c);
           if (s < best) {
             best = s;
             g[0] = a;
@@ -79,8 +86,33 @@ int main(int argc, char **argv)
   const bool choice = how == "choice" || tuned;
   const bool dipoles = argc > 7 && std::string(argv[7]) == "dipoles";
   const int warmups = argc > 8 ? std::max(1, std::atoi(argv[8])) : 1;
+  const bool periodic = dist.rfind("periodic", 0) == 0;
+  const bool whole = dist == "plummer" || dist == "clusters" || dist == "periodic_plummer" ||
+      dist == "periodic_clusters";    // every rank draws all points and keeps its brick's
+  bench::Points all;
+  double blo[3] = {-1, -1, -1}, bhi[3] = {1, 1, 1};    // the box the bricks divide
+  if (dist == "plummer") {
+    all = bench::plummer(N, 7);
+    for (int d = 0; d < 3; ++d) blo[d] = -50.0, bhi[d] = 50.0;
+  } else if (dist == "clusters") {
+    all = kifmm_points::two_clusters(N, 3);
+    for (int d = 0; d < 3; ++d) blo[d] = 1e300, bhi[d] = -1e300;
+    for (std::size_t i = 0; i < all.size(); ++i)
+      for (int d = 0; d < 3; ++d) {
+        blo[d] = std::min(blo[d], all.xyz[3 * i + d]);
+        bhi[d] = std::max(bhi[d], all.xyz[3 * i + d]);
+      }
+  } else if (dist == "periodic_plummer") {
+    all = bench::into_periodic_cell(bench::plummer(N, 2));
+  } else if (dist == "periodic_clusters") {
+    all = bench::into_periodic_cell(kifmm_points::two_clusters(N, 3));
+  } else if (dist != "uniform" && dist != "periodic") {
+    if (me == 0) std::fprintf(stderr, "bench_scaling: unknown point set %s\n", dist.c_str());
+    MPI_Abort(MPI_COMM_WORLD, 1);
+  }
+  const double L[3] = {bhi[0] - blo[0], bhi[1] - blo[1], bhi[2] - blo[2]};
   int g[3];
-  grid(P, g);
+  grid(P, g, L);
   const int c[3] = {me % g[0], (me / g[0]) % g[1], me / (g[0] * g[1])};
   double lo[3], hi[3];
   for (int d = 0; d < 3; ++d) {
@@ -88,13 +120,12 @@ int main(int argc, char **argv)
     hi[d] = -1.0 + 2.0 * (c[d] + 1) / g[d];
   }
   bench::Points mine;
-  if (dist == "plummer") {
-    bench::Points all = bench::plummer(N, 7);
+  if (whole) {
     for (std::size_t i = 0; i < all.size(); ++i) {
       bool in = true;
       for (int d = 0; d < 3; ++d) {
-        // bricks of the box [-50,50]^3 (open at the outer faces)
-        const double x = all.xyz[3 * i + d] / 50.0;
+        // bricks of the box (open at the outer faces), in [-1,1] coordinates
+        const double x = -1.0 + 2.0 * (all.xyz[3 * i + d] - blo[d]) / std::max(L[d], 1e-300);
         in = in && (c[d] == 0 || x >= lo[d]) && (c[d] == g[d] - 1 || x < hi[d]);
       }
       if (in) {
@@ -112,7 +143,7 @@ int main(int argc, char **argv)
   kifmm::Options o;
   o.order = order;
   o.top_level = top;
-  if (dist == "periodic") {
+  if (periodic) {
     o.periodic = true;
     o.fixed_root = true;
     o.root_half_width = 1.0;

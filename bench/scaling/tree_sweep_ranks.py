@@ -4,8 +4,11 @@
 # model's leaf size or periodic grid, kifmm::choose_tree(order, N, periodic, grid)) and the tree
 # tuned by timing from it (as kspace_style kifmm with tune yes) against a sweep of leaf sizes
 # (and, periodic, single-level grids), on P ranks of bench_scaling.
-#   python3 bench/scaling/tree_sweep_ranks.py [--build build] [--np 2] [--rounds 3]
+#   python3 bench/scaling/tree_sweep_ranks.py [--build build] [--np 2] [--rounds 3] [--span 8]
 #       [--cases uniform:1e5:3,6,10 periodic:1e5:3,6,10 plummer:1e5:3,6,10]
+# Point sets (bench_scaling): uniform, plummer, clusters (open); periodic (uniform),
+# periodic_plummer, periodic_clusters. --span F: the swept leaf sizes (and grids, by their points
+# per cell) within a factor F of the automatic tree's (0: all).
 # Every candidate is one bench_scaling process: 2 timed evaluations after the same number of
 # untimed ones (the tuned tree: its tuning evaluations and one warm-up; every other candidate:
 # as many warm-ups, the tuning evaluations counted by a first run of the tuned one, not timed);
@@ -42,6 +45,7 @@ def main():
     ap.add_argument("--build", default="build")
     ap.add_argument("--np", type=int, default=2)
     ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--span", type=float, default=8.0)
     ap.add_argument("--cases", nargs="*", default=["uniform:1e5:3,6,10", "periodic:1e5:3,6,10", "plummer:1e5:3,6,10"])
     a = ap.parse_args()
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
@@ -53,15 +57,23 @@ def main():
     print("\nwall s per evaluation on %d ranks x 1 thread (slowest rank), medians of %d rounds; every candidate "
           "timed after as many untimed evaluations as the tuned tree (its tuning evaluations + 1)\n" % (a.np, a.rounds))
     print("| points | N | p | ranks | tree auto / tuned / best | depth auto / tuned / best | s auto / tuned / best "
-          "| auto/best | tuned/best | candidates | tuning evaluations |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+          "| auto/best | tuned/best | candidates | tuning evaluations | points per rank min / max |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for case in a.cases:
         dist, n, orders = case.split(":")
         n = int(float(n))
         for order in [int(o) for o in orders.split(",")]:
-            hows = ["choice", "tuned"] + ["leaf=%d" % l for l in (16, 32, 64, 128, 256, 512, 1024, 2048, 4096) if l <= n]
-            if dist == "periodic":
-                hows += ["grid=%d" % k for k in (3, 4, 6, 8, 11, 16, 22) if 2 * k ** 3 <= n]
+            auto = run(a.build, a.np, n, dist, order, "choice")
+            # the automatic tree's points per leaf (a grid: per cell)
+            per = n / auto["grid"] ** 3 if auto["grid"] > 0 else auto["leaf"]
+
+            def near(m):
+                return a.span <= 0 or per / a.span <= m <= per * a.span
+
+            hows = ["choice", "tuned"] + ["leaf=%d" % l for l in (16, 32, 64, 128, 256, 512, 1024, 2048, 4096)
+                                          if l <= n and near(l)]
+            if dist.startswith("periodic"):
+                hows += ["grid=%d" % k for k in (3, 4, 6, 8, 11, 16, 22) if 2 * k ** 3 <= n and near(n / k ** 3)]
             times = {h: [] for h in hows}
             rows = {}
             # the tuning evaluations, for the other candidates' warm-ups
@@ -85,10 +97,12 @@ def main():
                 return statistics.median([x / y for x, y in zip(times[h], times[best])])
 
             ra, rt, rb = rows["choice"], rows["tuned"], rows[best]
-            print("| %s | %d | %d | %d | %s / %s / %s | %d / %d / %d | %.4g / %.4g / %.4g | %.2f | %.2f | %d | %d |" % (
+            print("| %s | %d | %d | %d | %s / %s / %s | %d / %d / %d | %.4g / %.4g / %.4g | %.2f | %.2f | %d | %d "
+                  "| %d / %d |" % (
                 dist, n, order, a.np, label(ra), label(rt), label(rb), ra["depth"], rt["depth"], rb["depth"],
                 statistics.median(times["choice"]), statistics.median(times["tuned"]), statistics.median(times[best]),
-                over_best("choice"), over_best("tuned"), len(swept), rt["tuning_evaluations"]))
+                over_best("choice"), over_best("tuned"), len(swept), rt["tuning_evaluations"], ra["own_min"],
+                ra["own_max"]))
             sys.stdout.flush()
     print("\nload after %s" % " ".join(open("/proc/loadavg").read().split()[:3]))
 

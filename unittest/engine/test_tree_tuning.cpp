@@ -2,7 +2,8 @@
 // Tuning the tree by timing (kifmm::TreeTuner): the walk along the ladders of octrees and
 // single-level grids on given times (it reaches the fastest tree, also across a bump within the
 // flat tolerance, keeps the tree in use within the margin, does not time trees modelled far
-// slower than it, tunes nothing that was given), and
+// slower than it, times the octrees beside the grid of the uniform model, tunes nothing that was
+// given), and
 // real evaluations during tuning, whose results must all be as accurate as the modelled
 // choice's (open: direct sum; periodic: Ewald).
 #include "cost_model.h"
@@ -118,6 +119,59 @@ TEST(TreeTuning, SearchesTheGridsFromTheirModelledBest)
     return o.periodic_grid > 0 ? 1.0 + 0.1 * std::abs(o.periodic_grid - target) : 2.0;
   });
   EXPECT_EQ(t.grid, target);
+}
+
+TEST(TreeTuning, TimesTheOctreesOfTheUniformModelBesideItsGrid)
+{
+  // several ranks (no points), periodic: the uniform model chooses a grid and models every
+  // octree beyond kTuneOtherLadder times it, yet on clustered atoms an octree can be the fastest
+  // tree; the octree ladder is timed from its tree of least modelled cost and walked to the
+  // fastest octree, or left after that one tree when it is kTuneSlower times the fastest grid
+  const std::size_t n = 100000;
+  const int order = 4;
+  const kifmm::Options start = uniform_start(n, true, order, -1);
+  ASSERT_GT(start.periodic_grid, 0);
+  const double grid_cost = kifmm::modelled_grid_cost(order, n, kifmm::uniform_grid_counts(n, start.periodic_grid));
+  int d_least = -1;
+  double least = 0;
+  for (int d = 0; std::ldexp(1.0, 3 * d) <= (double) n; ++d) {
+    const double c = kifmm::modelled_cost(order, n, true, d);
+    if (d_least < 0 || c < least) {
+      least = c;
+      d_least = d;
+    }
+  }
+  ASSERT_GT(least, kifmm::kTuneOtherLadder * grid_cost);    // the other ladder is not modelled near
+  ASSERT_GE(d_least, 1);
+  auto depth_of = [&](int leaf) {
+    for (int d = 0; std::ldexp(1.0, 3 * d) <= (double) n; ++d)
+      if (kifmm::leaf_size_for_depth(n, d) == leaf) return d;
+    ADD_FAILURE() << "leaf " << leaf << " is not on the uniform ladder";
+    return -1;
+  };
+  // clustered: the grids 2 and more, the octrees fastest one level above the least modelled one
+  const int target = d_least - 1;
+  kifmm::TreeTuner clustered(KernelSpec{}, kifmm::TreeRequest{n, 0, -1, true}, start, n, nullptr);
+  const kifmm::TreeChoice t = tune_on(clustered, start, [&](const kifmm::Options &o) {
+    return o.periodic_grid > 0 ? 2.0 + 0.2 * std::abs(o.periodic_grid - start.periodic_grid)
+                               : 1.0 + 0.1 * std::abs(depth_of(o.leaf_size) - target);
+  });
+  EXPECT_EQ(t.grid, 0);
+  EXPECT_EQ(t.leaf_size, kifmm::leaf_size_for_depth(n, target));
+  // uniform: the octrees twice the grids' time; one octree timed, once after its warm-up
+  kifmm::TreeTuner uniform(KernelSpec{}, kifmm::TreeRequest{n, 0, -1, true}, start, n, nullptr);
+  const kifmm::TreeChoice u = tune_on(uniform, start, [&](const kifmm::Options &o) {
+    return o.periodic_grid > 0 ? 1.0 + 0.1 * std::abs(o.periodic_grid - start.periodic_grid) : 2.0;
+  });
+  EXPECT_EQ(u.grid, start.periodic_grid);
+  int octrees = 0;
+  for (const auto &c : uniform.timed())
+    if (c.tree.grid == 0) {
+      ++octrees;
+      EXPECT_EQ(c.tree.leaf_size, kifmm::leaf_size_for_depth(n, d_least));
+      EXPECT_EQ(c.evaluations, 2);
+    }
+  EXPECT_EQ(octrees, 1);
 }
 
 TEST(TreeTuning, KeepsTheTreeInUseWithinTheMargin)

@@ -79,14 +79,17 @@ TreeTuner::TreeTuner(const KernelSpec &kernel, const TreeRequest &request, const
   }
   if (at == ladders_[first].size() || ladders_[0].size() + ladders_[1].size() < 2) return;
   first_ladder_ = first;
+  uniform_ = !xyz;
   // on the points only: the uniform ladders (xyz null) miss by more on clustered atoms
   const double in_use_cost = ladders_[first][at].tree.cost;
-  cost_limit_ = xyz && in_use_cost > 0 ? kTuneModelled * in_use_cost : std::numeric_limits<double>::infinity();
+  if (xyz && in_use_cost > 0) cost_limit_ = kTuneModelled * in_use_cost;
   const std::vector<Rung> &other = ladders_[1 - first];
   if (!other.empty()) {
     const auto least = std::min_element(other.begin(), other.end(),
                                         [](const Rung &a, const Rung &b) { return a.tree.cost < b.tree.cost; });
-    if (least->tree.cost <= kTuneOtherLadder * ladders_[first][at].tree.cost) other_start_ = least - other.begin();
+    // the uniform model cannot tell a clustered set (where an octree beats every grid) from a
+    // uniform one: there the other ladder is always timed
+    if (uniform_ || least->tree.cost <= kTuneOtherLadder * in_use_cost) other_start_ = least - other.begin();
   }
   done_ = false;
   start(first, at);
@@ -167,10 +170,23 @@ bool TreeTuner::walk(int ladder)
   return false;
 }
 
+// the fastest time on a ladder is more than kTuneSlower times the fastest of all trees timed
+bool TreeTuner::ladder_behind(int ladder) const
+{
+  double fastest = std::numeric_limits<double>::infinity(), here = fastest;
+  for (const Rung &r : ladders_[ladder])
+    if (r.timed >= 0) here = std::min(here, timed_[r.timed].least);
+  for (const Timed &t : timed_) fastest = std::min(fastest, t.least);
+  return here > kTuneSlower * fastest;
+}
+
 void TreeTuner::next_tree()
 {
   if ((int) timed_.size() < kTuneTrees) {
-    if (walk(ladder_)) return;
+    // the other ladder of the uniform model, timed without its model's consent, is walked only
+    // while it keeps up with the fastest tree
+    const bool behind = uniform_ && ladder_ != first_ladder_ && ladder_behind(ladder_);
+    if (!behind && walk(ladder_)) return;
     if (ladder_ == first_ladder_ && other_start_ >= 0) {
       start(1 - first_ladder_, (std::size_t) other_start_);
       other_start_ = -1;

@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstddef>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -352,7 +353,10 @@ TreeChoice choose_tree_from_points(const KernelSpec &kernel, const TreeRequest &
 // neighbour until both neighbours of the fastest are slower, and of every tree within kTuneFlat
 // of the fastest (flat stretches and bumps of a few per cent, where noise would stop the walk);
 // then the same on the other ladder from its tree of least modelled cost, when that is within
-// kTuneOtherLadder of the tree in use's modelled cost. On the points (xyz given), a tree
+// kTuneOtherLadder of the tree in use's modelled cost; on the uniform ladders (xyz null) always,
+// since that model cannot see clustering (a Plummer sphere in a periodic cell: octrees twice as
+// fast as the grid the uniform model chooses), walked on only while its fastest tree is within
+// kTuneSlower of the fastest tree timed. On the points (xyz given), a tree
 // modelled at more than kTuneModelled times the tree in use's cost is not timed (slower by more
 // than the model's misses; deep trees at high orders take gigabytes); the uniform ladders of
 // several ranks (xyz null) are walked without this limit, their model misses more on
@@ -411,6 +415,7 @@ class TreeTuner {
   };
   void next_tree();
   bool walk(int ladder);
+  bool ladder_behind(int ladder) const;
   void use(std::unique_ptr<Evaluator> &ev, std::size_t i);
   void start(int ladder, std::size_t rung);
   KernelSpec kernel_;
@@ -421,7 +426,8 @@ class TreeTuner {
   std::size_t rung_ = 0;
   int first_ladder_ = 0;
   long other_start_ = -1;           // the other ladder's start (-1: not searched)
-  double cost_limit_ = 0;           // modelled cost above which a tree is not timed
+  double cost_limit_ = std::numeric_limits<double>::infinity();    // modelled cost above which a tree is not timed
+  bool uniform_ = false;            // the ladders of n uniform points (xyz null)
   std::size_t in_use_ = 0;          // index in timed_ of the evaluator in use
   int evaluations_ = 0;
   bool done_ = true;

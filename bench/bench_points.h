@@ -121,16 +121,23 @@ inline double relative_difference(const std::vector<double> &a, const std::vecto
   return std::sqrt(num / den);
 }
 
-// The points scaled into the periodic cell [-1,1]^3 (a small margin inside), charges shifted to
-// a zero sum.
-inline Points into_periodic_cell(Points p)
+// The bounding box of the points.
+inline void bounding_box(const Points &p, double lo[3], double hi[3])
 {
-  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+  for (int d = 0; d < 3; ++d) lo[d] = 1e300, hi[d] = -1e300;
   for (std::size_t i = 0; i < p.size(); ++i)
     for (int d = 0; d < 3; ++d) {
       lo[d] = std::min(lo[d], p.xyz[3 * i + d]);
       hi[d] = std::max(hi[d], p.xyz[3 * i + d]);
     }
+}
+
+// The points scaled into the periodic cell [-1,1]^3 (a small margin inside), charges shifted to
+// a zero sum.
+inline Points into_periodic_cell(Points p)
+{
+  double lo[3], hi[3];
+  bounding_box(p, lo, hi);
   const double w = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-300});
   double qsum = 0;
   for (std::size_t i = 0; i < p.size(); ++i) {

@@ -96,12 +96,7 @@ int main(int argc, char **argv)
     for (int d = 0; d < 3; ++d) blo[d] = -50.0, bhi[d] = 50.0;
   } else if (dist == "clusters") {
     all = kifmm_points::two_clusters(N, 3);
-    for (int d = 0; d < 3; ++d) blo[d] = 1e300, bhi[d] = -1e300;
-    for (std::size_t i = 0; i < all.size(); ++i)
-      for (int d = 0; d < 3; ++d) {
-        blo[d] = std::min(blo[d], all.xyz[3 * i + d]);
-        bhi[d] = std::max(bhi[d], all.xyz[3 * i + d]);
-      }
+    bench::bounding_box(all, blo, bhi);
   } else if (dist == "periodic_plummer") {
     all = bench::into_periodic_cell(bench::plummer(N, 2));
   } else if (dist == "periodic_clusters") {

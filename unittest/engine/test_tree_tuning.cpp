@@ -52,6 +52,14 @@ kifmm::Options uniform_start(std::size_t n, bool periodic, int order, int grid_r
   return kifmm::plan_tree(o, kifmm::TreeRequest{n, 0, grid_request, true}).options;
 }
 
+// the depth of the uniform ladder's tree of this leaf size (leaf_size_for_depth), -1 if none
+int uniform_depth(std::size_t n, int leaf)
+{
+  for (int d = 0; std::ldexp(1.0, 3 * d) <= (double) n; ++d)
+    if (kifmm::leaf_size_for_depth(n, d) == leaf) return d;
+  return -1;
+}
+
 }    // namespace
 
 TEST(TreeTuning, WalksTheOctreeLadderToTheFastestTree)
@@ -65,8 +73,8 @@ TEST(TreeTuning, WalksTheOctreeLadderToTheFastestTree)
     ASSERT_TRUE(tuner.tuning());
     // the depth of the uniform tree of this leaf size: time 1 at the target depth, more away
     const kifmm::TreeChoice t = tune_on(tuner, start, [&](const kifmm::Options &o) {
-      int d = 0;
-      while (kifmm::leaf_size_for_depth(n, d) != o.leaf_size && d < 20) ++d;
+      const int d = uniform_depth(n, o.leaf_size);
+      EXPECT_GE(d, 0) << "leaf " << o.leaf_size << " is not on the uniform ladder";
       EXPECT_EQ(o.periodic_grid, 0);
       return 1.0 + 0.2 * std::abs(d - target);
     });
@@ -86,8 +94,8 @@ TEST(TreeTuning, CrossesABumpWithinTheFlatTolerance)
   kifmm::TreeTuner tuner(KernelSpec{}, kifmm::TreeRequest{n, 0, 0, true}, start, n, nullptr);
   ASSERT_TRUE(tuner.tuning());
   const kifmm::TreeChoice t = tune_on(tuner, start, [&](const kifmm::Options &o) {
-    int d = 0;
-    while (kifmm::leaf_size_for_depth(n, d) != o.leaf_size && d < 20) ++d;
+    const int d = uniform_depth(n, o.leaf_size);
+    EXPECT_GE(d, 0) << "leaf " << o.leaf_size << " is not on the uniform ladder";
     if (d == d0 - 1) return 1.0 + 0.8 * kifmm::kTuneFlat;
     if (d == d0 - 2) return 0.85;
     return d == d0 ? 1.0 : 1.3;
@@ -144,10 +152,9 @@ TEST(TreeTuning, TimesTheOctreesOfTheUniformModelBesideItsGrid)
   ASSERT_GT(least, kifmm::kTuneOtherLadder * grid_cost);    // the other ladder is not modelled near
   ASSERT_GE(d_least, 1);
   auto depth_of = [&](int leaf) {
-    for (int d = 0; std::ldexp(1.0, 3 * d) <= (double) n; ++d)
-      if (kifmm::leaf_size_for_depth(n, d) == leaf) return d;
-    ADD_FAILURE() << "leaf " << leaf << " is not on the uniform ladder";
-    return -1;
+    const int d = uniform_depth(n, leaf);
+    EXPECT_GE(d, 0) << "leaf " << leaf << " is not on the uniform ladder";
+    return d;
   };
   // clustered: the grids 2 and more, the octrees fastest one level above the least modelled one
   const int target = d_least - 1;

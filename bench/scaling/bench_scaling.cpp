@@ -15,8 +15,8 @@
 // ranks), phases (max over ranks), bytes sent per rank and ghost points per rank (min/avg/max).
 // "dipoles": every point also carries a random dipole moment (evaluate_dipoles_distributed,
 // with second derivatives at the targets). "tuned": from the choice, the tree is tuned by timing
-// as kspace_style kifmm tunes it on several ranks (kifmm::TreeTuner on the uniform ladder, the
-// slowest rank's time) before the timed evaluations; the JSON line adds the tuning evaluations.
+// as kspace_style kifmm tunes it on several ranks (kifmm::TreeTuner on the ladders of the stand-in
+// of all ranks' points, the slowest rank's time) before the timed evaluations; the JSON line adds the tuning evaluations.
 // warm-ups (default 1): untimed evaluations of the tree before the timed ones (the tuned tree:
 // after its tuning), so that candidates compared in a sweep can be warmed up alike.
 #include "kifmm.h"
@@ -78,8 +78,9 @@ int main(int argc, char **argv)
   const int order = argc > 3 ? std::atoi(argv[3]) : 6;
   const int reps = argc > 4 ? std::atoi(argv[4]) : 3;
   const int top = argc > 5 ? std::atoi(argv[5]) : 0;
-  // "choice": leaf size (periodic: or single-level grid) of kifmm::choose_tree(order, N,
-  // periodic, grid), as kspace_style kifmm on several ranks; default: the per-order leaf size
+  // "choice": leaf size (periodic: or single-level grid) chosen as kspace_style kifmm does on
+  // several ranks (plan_tree, then choose_tree_from_layout on the stand-in of all ranks' points,
+  // gather_layout); default: the per-order leaf size
   // "leaf=M": that leaf size (octree); "grid=K": the periodic single-level grid of K^3 cells
   const std::string how = argc > 6 ? argv[6] : "";
   const bool tuned = how == "tuned";
@@ -143,19 +144,23 @@ int main(int argc, char **argv)
     o.fixed_root = true;
     o.root_half_width = 1.0;
   }
-  if (choice) {    // as kspace_style kifmm on several ranks: the uniform model's tree or grid
-    const kifmm::TreeChoice c = kifmm::choose_tree(order, N, o.periodic, o.periodic);
-    o.leaf_size = c.leaf_size;
-    o.periodic_grid = c.grid;
+  kifmm::KernelSpec spec;
+  kifmm::MpiCommunicator comm(MPI_COMM_WORLD);
+  const kifmm::TreeRequest request{N, 0, o.periodic ? -1 : 0, true};
+  if (choice) {    // as kspace_style kifmm on several ranks: the choice on the stand-in of all ranks' points
+    const kifmm::TreePlan plan = kifmm::plan_tree(o, request);
+    o = plan.options;
+    if (plan.from_points) {
+      const kifmm::PointLayout layout = kifmm::gather_layout(spec, o, mine.size(), mine.xyz.data(), comm);
+      if (!layout.xyz.empty()) kifmm::choose_tree_from_layout(spec, request, o, layout);
+    }
   } else if (how.rfind("leaf=", 0) == 0) {
     o.leaf_size = std::atoi(how.c_str() + 5);
     o.periodic_grid = 0;
   } else if (how.rfind("grid=", 0) == 0) {
     o.periodic_grid = std::atoi(how.c_str() + 5);
   }
-  kifmm::KernelSpec spec;
   std::unique_ptr<kifmm::Evaluator> ev = kifmm::make_evaluator(spec, o);
-  kifmm::MpiCommunicator comm(MPI_COMM_WORLD);
   const std::size_t n = mine.size();
   std::vector<double> grad(3 * n), hess(dipoles ? 6 * n : 0), mu(dipoles ? 3 * n : 0);
   for (std::size_t i = 0; i < mu.size(); ++i) mu[i] = 0.01 * std::sin(1.0 + 7.0 * (double) (i + 13 * me));
@@ -170,7 +175,10 @@ int main(int argc, char **argv)
   for (int w = 1; w < warmups && !tuned; ++w) evaluate();
   int tuning_evaluations = 0;
   if (tuned) {
-    kifmm::TreeTuner tuner(spec, kifmm::TreeRequest{N, 0, o.periodic ? -1 : 0, true}, o, N, nullptr);
+    const kifmm::PointLayout layout = kifmm::gather_layout(spec, o, mine.size(), mine.xyz.data(), comm);
+    kifmm::TreeTuner tuner = layout.xyz.empty()
+        ? kifmm::TreeTuner(spec, request, o, N, nullptr)
+        : kifmm::TreeTuner(spec, request, o, layout.n, layout.xyz.data(), &layout.model);
     while (tuner.tuning()) {
       tuner.select(ev);
       MPI_Barrier(MPI_COMM_WORLD);

@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 # This file is part of lammps-kifmm, a LAMMPS package; GPL-2.0 (see LICENSE).
-# The tree of the distributed evaluation (kspace_style kifmm on several ranks: the uniform
-# model's leaf size or periodic grid, kifmm::choose_tree(order, N, periodic, grid)) and the tree
-# tuned by timing from it (as kspace_style kifmm with tune yes) against a sweep of leaf sizes
+# The tree of the distributed evaluation (kspace_style kifmm on several ranks: the leaf size or
+# periodic grid chosen on the stand-in of all ranks' points, kifmm::gather_layout and
+# choose_tree_from_layout; beyond its size the uniform model's) and the tree tuned by timing from it (as kspace_style kifmm with tune yes) against a sweep of leaf sizes
 # (and, periodic, single-level grids), on P ranks of bench_scaling.
 #   python3 bench/scaling/tree_sweep_ranks.py [--build build] [--np 2] [--rounds 3] [--span 8]
 #       [--cases uniform:1e5:3,6,10 periodic:1e5:3,6,10 plummer:1e5:3,6,10]

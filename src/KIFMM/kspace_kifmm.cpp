@@ -367,17 +367,27 @@ void KSpaceKIFMM::setup_run()
   }
 }
 
-// Leaf size from the atom positions (one rank, no leaf size given): the engine builds the trees
-// of a few candidate leaf sizes over these atoms and takes the one of least modelled cost
-// (kifmm::choose_tree(kernel, options, n, xyz)); once per run, at its first evaluation.
+// Leaf size from the atom positions (no leaf size given): the engine builds the trees of a few
+// candidate leaf sizes over these atoms and takes the one of least modelled cost
+// (kifmm::choose_tree(kernel, options, n, xyz)); on several ranks over the stand-in of all
+// ranks' atoms (kifmm::gather_layout, the same on every rank); once per run, at its first
+// evaluation.
 void KSpaceKIFMM::choose_tree_from_atoms()
 {
   tree_choice_pending = false;
-  const std::size_t n = strength.size();
-  if (n == 0) return;
+  std::size_t n = strength.size();
   kifmm::Options opt = engine->options();    // the periodic cell is its root (periodic_cell)
   const double t0 = MPI_Wtime();
-  const kifmm::TreeChoice c = kifmm::choose_tree_from_points(engine->kernel(), tree_request, opt, n, xyz.data());
+  kifmm::TreeChoice c{opt.leaf_size, 0, 0.0, opt.periodic_grid};
+  if (distributed()) {
+    const kifmm::PointLayout layout = kifmm::gather_layout(engine->kernel(), opt, n, xyz.data(), *kcomm);
+    n = layout.n;
+    if (layout.xyz.empty()) return;
+    c = kifmm::choose_tree_from_layout(engine->kernel(), tree_request, opt, layout);
+  } else {
+    if (n == 0) return;
+    c = kifmm::choose_tree_from_points(engine->kernel(), tree_request, opt, n, xyz.data());
+  }
   const double t_choice = MPI_Wtime() - t0;
   const int grid = opt.periodic_grid;
   if (opt.leaf_size != engine_options.leaf_size || grid != engine_options.periodic_grid) {
@@ -393,9 +403,9 @@ void KSpaceKIFMM::choose_tree_from_atoms()
                    grid_cells_text(engine_options), kset.grid < 0 ? " chosen from the atom positions" : "", n, c.cost, t_choice);
   else
     utils::logmesg(lmp,
-                   "  KIFMM tree chosen from the positions of {} atoms: leaf size {} (tree depth {}, "
+                   "  KIFMM tree chosen from the positions of {} atoms{}: leaf size {} (tree depth {}, "
                    "modelled {:.3g} s per evaluation on one thread; choice {:.3g} s)\n",
-                   n, c.leaf_size, c.depth, c.cost, t_choice);
+                   n, distributed() ? " (their layout over all ranks)" : "", c.leaf_size, c.depth, c.cost, t_choice);
 }
 
 // Pairs at zero distance are excluded from the sum (never inf); say so once per run.

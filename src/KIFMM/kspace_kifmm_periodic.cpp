@@ -309,10 +309,11 @@ bool KSpaceKIFMM::periodic_tensor() const
 
 // The evaluator of the virial tensor: the engine when it is the single-level grid; next to the
 // octree, a grid of the same order (fitting the box; made again when the box changes shape so
-// that it no longer fits): on one rank the grid of least modelled cost on the atoms' cell
-// occupancies (kifmm::model_grids; a Plummer sphere of 1e5 atoms at order 5: 18^3 cells, 1.5
-// times as fast as 7^3, whose near field the cluster fills), on several ranks one whose cells
-// are about as many as the octree's leaves.
+// that it no longer fits): the grid of least modelled cost on the atoms' cell occupancies
+// (kifmm::model_grids; a Plummer sphere of 1e5 atoms at order 5: 18^3 cells, 1.5 times as fast
+// as 7^3, whose near field the cluster fills), on several ranks on the stand-in of all ranks'
+// atoms (kifmm::gather_layout); beyond its size one whose cells are about as many as the
+// octree's leaves.
 kifmm::Evaluator &KSpaceKIFMM::virial_evaluator()
 {
   const kifmm::Options &o = engine->options();
@@ -327,8 +328,13 @@ kifmm::Evaluator &KSpaceKIFMM::virial_evaluator()
     if (periodic_fits(virial_engine->options())) return *virial_engine;
   }
   int best = 0;
-  if (!distributed() && !strength.empty()) {
-    double least = 0;
+  double least = 0;
+  if (distributed()) {
+    const kifmm::PointLayout layout = kifmm::gather_layout(engine->kernel(), o, strength.size(), xyz.data(), *kcomm);
+    if (!layout.xyz.empty())
+      for (const kifmm::TreeChoice &g : kifmm::model_grids(engine->kernel(), layout.model, layout.n, layout.xyz.data(), false))
+        if (best == 0 || g.cost < least) best = g.grid, least = g.cost;
+  } else if (!strength.empty()) {
     for (const kifmm::TreeChoice &g : kifmm::model_grids(engine->kernel(), o, strength.size(), xyz.data(), false))
       if (best == 0 || g.cost < least) best = g.grid, least = g.cost;
   }

@@ -22,14 +22,22 @@ std::string tree_text(const kifmm::TreeChoice &t, const std::string &grid_cells)
 }    // namespace
 
 // before an evaluation: tuning starts at the second evaluation of a run, once the order is
-// settled (one rank: the trees modelled on its atoms; several: on uniformly spread atoms, the
-// same on every rank); the evaluator of the tree to time next
+// settled (one rank: the trees modelled on its atoms; several: on the stand-in of all ranks'
+// atoms, kifmm::gather_layout, or beyond its size on uniformly spread atoms, the same on every
+// rank); the evaluator of the tree to time next
 void KSpaceKIFMM::select_tuned_tree()
 {
   if (tune_pending && !verify_pending && !tree_choice_pending) {
     tune_pending = false;
-    tuner = distributed() ? kifmm::TreeTuner(engine->kernel(), tree_request, engine_options, tree_request.n, nullptr)
-                          : kifmm::TreeTuner(engine->kernel(), tree_request, engine_options, strength.size(), xyz.data());
+    if (distributed()) {
+      const kifmm::PointLayout layout =
+          kifmm::gather_layout(engine->kernel(), engine_options, strength.size(), xyz.data(), *kcomm);
+      tuner = layout.xyz.empty()
+          ? kifmm::TreeTuner(engine->kernel(), tree_request, engine_options, tree_request.n, nullptr)
+          : kifmm::TreeTuner(engine->kernel(), tree_request, engine_options, layout.n, layout.xyz.data(), &layout.model);
+    } else {
+      tuner = kifmm::TreeTuner(engine->kernel(), tree_request, engine_options, strength.size(), xyz.data());
+    }
   }
   if (!tuner.tuning()) return;
   tuner.select(engine);

@@ -732,3 +732,33 @@ TEST(Distributed, DipoleVirialEqualsSerial)
     EXPECT_LE(err / wmax, 1e-10) << (periodic ? "periodic grid" : "open");
   }
 }
+
+// The stand-in of all ranks' points for the tree choice (gather_layout): on every rank, for
+// every partition, the same points as the serial layout of all points (the histogram's counts
+// are summed exactly, the stand-in drawn from the same sequence); open and periodic, clustered.
+TEST(Distributed, PointLayoutIsTheSerialOneOnEveryRank)
+{
+  const int me = rank_of_world(), np = size_of_world();
+  kifmm::SerialCommunicator serial;
+  kifmm::MpiCommunicator comm(MPI_COMM_WORLD);
+  const Points sets[2] = {plummer(6000, 41), periodic_clusters(4000, 42)};
+  for (int s = 0; s < 2; ++s) {
+    const Points &all = sets[s];
+    const kifmm::Options o = test_options(6, 0, 0, s == 1 ? 1.0 : 0.0, 0);
+    const kifmm::PointLayout whole = kifmm::gather_layout(kifmm::KernelSpec{}, o, all.size(), all.xyz.data(), serial);
+    ASSERT_EQ(whole.xyz.size(), 3 * all.size());
+    for (int j = 0; j < 4; ++j) {
+      const std::vector<int> owner = kPartitions[j](all, np);
+      std::vector<double> mine;
+      for (std::size_t i = 0; i < all.size(); ++i)
+        if (owner[i] == me) mine.insert(mine.end(), &all.xyz[3 * i], &all.xyz[3 * i] + 3);
+      const kifmm::PointLayout layout =
+          kifmm::gather_layout(kifmm::KernelSpec{}, o, mine.size() / 3, mine.data(), comm);
+      int same = layout.n == all.size() && layout.xyz == whole.xyz;
+      for (int d = 0; d < 3; ++d) same = same && layout.model.root_center[d] == whole.model.root_center[d];
+      same = same && layout.model.root_half_width == whole.model.root_half_width;
+      MPI_Allreduce(MPI_IN_PLACE, &same, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+      EXPECT_EQ(same, 1) << (s == 1 ? "periodic clusters, " : "open plummer, ") << kPartitionNames[j];
+    }
+  }
+}

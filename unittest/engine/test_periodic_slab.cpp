@@ -220,11 +220,13 @@ TEST(PeriodicSlab, GridChosenFromTheOccupancies)
   chosen.periodic_grid = cs.grid;
   const SlabErrors e = slab_errors(chosen, few, slab_reference(chosen, few));
   EXPECT_LT(e.grad, 1e-4);
-  // plan_tree: from the points on one process, with the grid in use kept until then
+  // plan_tree: from the points (on several ranks their stand-in, up to its size), with the grid
+  // in use kept until then
   const kifmm::TreePlan one = kifmm::plan_tree(o, kifmm::TreeRequest{n, 0, -1, false});
   EXPECT_TRUE(one.from_points);
   EXPECT_EQ(one.options.periodic_grid, u.grid);
-  EXPECT_FALSE(kifmm::plan_tree(o, kifmm::TreeRequest{n, 0, -1, true}).from_points);
+  EXPECT_TRUE(kifmm::plan_tree(o, kifmm::TreeRequest{n, 0, -1, true}).from_points);
+  EXPECT_FALSE(kifmm::plan_tree(o, kifmm::TreeRequest{kifmm::kLayoutMaxPoints + 1, 0, -1, true}).from_points);
   EXPECT_FALSE(kifmm::plan_tree(o, kifmm::TreeRequest{n, 0, 7, false}).from_points);
   kifmm::Options current = o;
   current.periodic_grid = cs.grid;

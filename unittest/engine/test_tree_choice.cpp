@@ -285,7 +285,7 @@ TEST(TreePlan, GivenLeafAndGridAreUsedAsIs)
   EXPECT_EQ(kifmm::plan_tree(cube_opts(6, 0, false), kifmm::TreeRequest{100000, 77, 5, false}).options.periodic_grid, 0);
 }
 
-TEST(TreePlan, UniformChoiceThenPointsOnOneProcess)
+TEST(TreePlan, UniformChoiceThenPoints)
 {
   for (bool periodic : {false, true}) {
     const kifmm::Options o = cube_opts(7, 0, periodic);
@@ -296,9 +296,11 @@ TEST(TreePlan, UniformChoiceThenPointsOnOneProcess)
     EXPECT_EQ(one.options.leaf_size, u.leaf_size);
     EXPECT_EQ(one.options.periodic_grid, periodic ? u.grid : 0);
     EXPECT_EQ(one.uniform.depth, u.depth);
+    // several ranks: from the stand-in of all ranks' points (gather_layout), up to its size
     const kifmm::TreePlan many = kifmm::plan_tree(o, kifmm::TreeRequest{n, 0, -1, true});
-    EXPECT_FALSE(many.from_points);
+    EXPECT_TRUE(many.from_points);
     EXPECT_EQ(many.options.leaf_size, u.leaf_size);
+    EXPECT_FALSE(kifmm::plan_tree(o, kifmm::TreeRequest{kifmm::kLayoutMaxPoints + 1, 0, -1, true}).from_points);
     // the evaluator in use is kept until the choice from the points, if its operators fit
     kifmm::Options current = o;
     current.leaf_size = 31;
@@ -308,9 +310,13 @@ TEST(TreePlan, UniformChoiceThenPointsOnOneProcess)
     EXPECT_EQ(kept.options.periodic_grid, current.periodic_grid);
     current.order = 8;
     EXPECT_EQ(kifmm::plan_tree(o, kifmm::TreeRequest{n, 0, -1, false}, &current).options.leaf_size, u.leaf_size);
-    // not kept when the tree is chosen by several ranks
+    // kept on several ranks too (the choice from the stand-in of their points), but not beyond
+    // the stand-in's size, where the uniform choice is final
     current.order = 7;
-    EXPECT_EQ(kifmm::plan_tree(o, kifmm::TreeRequest{n, 0, -1, true}, &current).options.leaf_size, u.leaf_size);
+    EXPECT_EQ(kifmm::plan_tree(o, kifmm::TreeRequest{n, 0, -1, true}, &current).options.leaf_size, 31);
+    const std::size_t big = kifmm::kLayoutMaxPoints + 1;
+    EXPECT_EQ(kifmm::plan_tree(o, kifmm::TreeRequest{big, 0, -1, true}, &current).options.leaf_size,
+              kifmm::choose_tree(7, big, periodic, periodic).leaf_size);
   }
 }
 

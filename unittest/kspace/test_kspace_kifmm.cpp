@@ -8,6 +8,7 @@
 #include "yaml_reference.h"
 
 #include "atom.h"
+#include "domain.h"
 #include "force.h"
 #include "lammps.h"
 #include "library.h"
@@ -668,7 +669,7 @@ TEST_F(KSpaceKifmm, MpiDistributedCheckMeasuresTheFullError)
 // Tuning (the default): after the first evaluation the trees near the modelled choice are timed
 // on the next evaluations and the fastest kept; every evaluation, during tuning and after, meets
 // the requested accuracy. On several ranks the ranks agree (the slowest rank's times) and the
-// trees are modelled on uniformly spread atoms. tune no: no tuning.
+// trees are modelled on the stand-in of all ranks' atoms. tune no: no tuning.
 TEST_F(KSpaceKifmm, MpiDistributedTreeTuningKeepsTheAccuracy)
 {
   load(clusters_and_uniform(1500, 13, 1500, 14));
@@ -714,6 +715,42 @@ TEST_F(KSpaceKifmm, MpiDistributedTreeTuningKeepsTheAccuracy)
   const std::string fixed = captured("run 3 post no");
   EXPECT_FALSE(kspace()->tuning());
   EXPECT_EQ(fixed.find("tree tuned"), std::string::npos) << fixed;
+}
+
+// On several ranks the tree is chosen on the stand-in of all ranks' atoms (kifmm::gather_layout),
+// the same on every rank: the choice of one rank holding all atoms. Clustered atoms in a
+// periodic box, where the model of uniformly spread atoms (the plan before the atoms are seen)
+// takes a grid and the atoms' own trees take an octree.
+TEST_F(KSpaceKifmm, MpiDistributedTreeChoiceIsTheOneRankChoice)
+{
+  load(clusters_and_uniform(4000, 15, 200, 16));
+  commands("change_box all boundary p p p\npair_style zero 0.01\npair_coeff * *\n"
+           "kspace_style kifmm 1e-4\nkspace_modify kifmm order 5 tune no");
+  const std::string out = captured("run 0 post no");
+  std::vector<double> xyz;
+  for (const auto &[id, x] : positions_by_id()) xyz.insert(xyz.end(), x.begin(), x.end());
+  const std::size_t n = xyz.size() / 3;
+  ASSERT_EQ((int) n, natoms());
+  kifmm::Options o;
+  o.order = 5;
+  o.periodic = true;
+  o.fixed_root = true;
+  const double *lo = lmp->domain->boxlo, *hi = lmp->domain->boxhi;
+  ASSERT_DOUBLE_EQ(hi[0] - lo[0], hi[2] - lo[2]);    // a cube
+  for (int d = 0; d < 3; ++d) o.root_center[d] = 0.5 * (lo[d] + hi[d]);
+  o.root_half_width = 0.5 * (hi[0] - lo[0]);
+  kifmm::Options one_rank = o;
+  kifmm::choose_tree_from_points(kifmm::KernelSpec{}, kifmm::TreeRequest{n, 0, -1, false}, one_rank, n, xyz.data());
+  const kifmm::TreeChoice uniform = kifmm::choose_tree(5, n, true, true);
+  EXPECT_GT(uniform.grid, 0);
+  EXPECT_EQ(one_rank.periodic_grid, 0);
+  EXPECT_EQ(kspace()->engine_grid(), one_rank.periodic_grid);
+  EXPECT_EQ(kspace()->engine_leaf_size(), one_rank.leaf_size);
+  int me = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &me);
+  if (me == 0)    // the log of rank 0
+    EXPECT_NE(out.find("KIFMM tree chosen from the positions of " + std::to_string(n) + " atoms"), std::string::npos)
+        << out;
 }
 
 // ---------------------------------------------------------------- YAML references

@@ -12,6 +12,13 @@ bool grid_is_chosen(const Options &options, const TreeRequest &request)
 {
   return options.periodic && request.grid < 0;
 }
+
+// one process holds all points, or several ranks up to kLayoutMaxPoints (their stand-in:
+// gather_layout); beyond that the uniform choice, the same on every rank
+bool from_points_possible(const TreeRequest &request)
+{
+  return !request.distributed || request.n <= kLayoutMaxPoints;
+}
 }    // namespace
 
 TreePlan plan_tree(const Options &options, const TreeRequest &request, const Options *current)
@@ -26,7 +33,7 @@ TreePlan plan_tree(const Options &options, const TreeRequest &request, const Opt
       plan.uniform = choose_slab_grid(opt.order, request.n, opt.root_shape);
       opt.periodic_grid = plan.uniform.grid;
       // one rank: chosen again on the actual occupancies (kept when the same as before)
-      plan.from_points = !request.distributed && request.grid < 0;
+      plan.from_points = request.grid < 0 && from_points_possible(request);
       if (plan.from_points && current && current->order == opt.order && current->periodic == opt.periodic &&
           current->periodic_dims == 2 && current->periodic_grid > 0)
         opt.periodic_grid = current->periodic_grid;
@@ -42,8 +49,7 @@ TreePlan plan_tree(const Options &options, const TreeRequest &request, const Opt
                              opt.near_pair_weight);
   opt.leaf_size = plan.uniform.leaf_size;
   if (choose_grid) opt.periodic_grid = plan.uniform.grid;
-  // several ranks: each holds only its own points, so the uniform choice, the same on every rank
-  if (request.distributed) return plan;
+  if (!from_points_possible(request)) return plan;
   plan.from_points = true;
   if (current && current->order == opt.order && current->cache_dir == opt.cache_dir &&
       current->periodic == opt.periodic) {
@@ -57,6 +63,15 @@ TreeChoice choose_tree_from_points(const KernelSpec &kernel, const TreeRequest &
                                    std::size_t n, const double *xyz)
 {
   const TreeChoice c = choose_tree(kernel, options, n, xyz);
+  options.leaf_size = c.leaf_size;
+  if (grid_is_chosen(options, request)) options.periodic_grid = c.grid;
+  return c;
+}
+
+TreeChoice choose_tree_from_layout(const KernelSpec &kernel, const TreeRequest &request, Options &options,
+                                   const PointLayout &layout)
+{
+  const TreeChoice c = choose_tree(kernel, layout.model, layout.n, layout.xyz.data());
   options.leaf_size = c.leaf_size;
   if (grid_is_chosen(options, request)) options.periodic_grid = c.grid;
   return c;

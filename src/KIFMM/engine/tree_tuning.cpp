@@ -59,17 +59,19 @@ Options tree_options(const Options &options, const TreeChoice &tree)
 }
 
 TreeTuner::TreeTuner(const KernelSpec &kernel, const TreeRequest &request, const Options &options, std::size_t n,
-                     const double *xyz) :
+                     const double *xyz, const Options *model) :
     kernel_(kernel), options_(options)
 {
+  const Options modelled = model ? tree_options(*model, TreeChoice{options.leaf_size, 0, 0.0, options.periodic_grid})
+                                 : options;
   const bool slab = options.periodic && options.periodic_dims == 2;
   const double *shape = options.fixed_root ? options.root_shape : nullptr;
   const bool octree = !slab && !(options.periodic && shape && !octree_fits_cell(shape));
   if (n == 0 || request.grid > 0 || (request.leaf_size > 0 && !slab)) return;    // given: not tuned
   if (octree)
-    for (const TreeChoice &t : octree_ladder(kernel, options, n, xyz)) ladders_[0].push_back(Rung{t});
+    for (const TreeChoice &t : octree_ladder(kernel, modelled, n, xyz)) ladders_[0].push_back(Rung{t});
   if (options.periodic && request.grid < 0)
-    for (const TreeChoice &t : model_grids(kernel, options, n, xyz, octree)) ladders_[1].push_back(Rung{t});
+    for (const TreeChoice &t : model_grids(kernel, modelled, n, xyz, octree)) ladders_[1].push_back(Rung{t});
   // the tree in use starts the walk
   const int first = options.periodic_grid > 0 ? 1 : 0;
   std::size_t at = ladders_[first].size();

@@ -287,9 +287,9 @@ inline void grid_near_depth(const double cs[3], int m[3], double ss[3])
 // between neighbouring ones, and the per-order default leaf size), evaluates the same cost
 // model on the counts of each actual tree (tree_counts, cost_model.h) and returns the cheapest;
 // the uniform choice is kept unless another tree is modelled more than 5 % cheaper (the fit's
-// residuals are 4-8 %). depth: of the actual tree. Deterministic for the same points; one
-// process's points only, so the distributed evaluation (each rank holds its own atoms) keeps
-// the uniform choice above. Costs a few tree builds (bench_engine --tree-choice: "choice s").
+// residuals are 4-8 %). depth: of the actual tree. Deterministic for the same points; the
+// distributed evaluation (each rank holds its own atoms) takes it on the stand-in of all ranks'
+// points (gather_layout below). Costs a few tree builds (bench_engine --tree-choice: "choice s").
 // Periodic: also the single-level grids of k^3 cells, k = 3 .. max_grid_cells(order)
 // (cost_model.h, counts of the actual cell occupancies); a grid is returned (grid = k, with
 // the octree's leaf size and depth kept for the distributed evaluation) when it is modelled
@@ -311,8 +311,10 @@ std::vector<TreeChoice> model_grids(const KernelSpec &kernel, const Options &opt
 
 // The tree of an N-body evaluation, from what the caller asks for (tree_plan.cpp; what
 // kspace_style kifmm uses). A given leaf size is used as is. Otherwise the uniform choice above
-// for n points, and, when one process holds all the points (not distributed), the choice from
-// the points at the first evaluation (choose_tree_from_points). grid (periodic only): > 0 the
+// for n points, and the choice from the points at the first evaluation: when one process holds
+// all the points (not distributed), choose_tree_from_points; on several ranks, up to
+// kLayoutMaxPoints points, choose_tree_from_layout on their stand-in (gather_layout, below).
+// grid (periodic only): > 0 the
 // single-level grid of grid^3 cells, < 0 chosen with the tree (the octree when a leaf size is
 // given), 0 the octree.
 struct TreeRequest {
@@ -336,6 +338,32 @@ TreePlan plan_tree(const Options &options, const TreeRequest &request, const Opt
 TreeChoice choose_tree_from_points(const KernelSpec &kernel, const TreeRequest &request, Options &options,
                                    std::size_t n, const double *xyz);
 
+// ---- the points of all ranks as the tree choice sees them (point_layout.cpp)
+// On several ranks each holds only its own points. gather_layout (collective: every rank calls
+// it) gives every rank the same stand-in for the points of all ranks: an adaptive histogram over
+// the evaluation's root (the periodic cell, or the bounding cube of all points) whose cells are
+// split while they hold more than kLayoutCell points, refined on global counts (one reduction
+// of the children's counts per level), and each cell's count spread uniformly over it
+// (pseudo-random, the same sequence on every rank). An octree of leaf size kLayoutCell or more
+// has the same cells with the same counts over the stand-in as over the real points (a cell it
+// splits holds more than kLayoutCell points, so its children's counts are in the histogram),
+// and so the same modelled cost (tree_counts); a single-level grid's occupancies are
+// approximate (the histogram's cells are spread over the grid's cells). Memory: the stand-in
+// points (24 bytes each) on every rank, and the trees the choice builds over them, as one rank
+// holding all points; none above kLayoutMaxPoints points (xyz empty: the uniform choice stays).
+constexpr double kLayoutCell = 8;
+constexpr std::size_t kLayoutMaxPoints = 4000000;
+struct PointLayout {
+  std::size_t n = 0;            // points of all ranks
+  std::vector<double> xyz;      // the stand-in points (3 n), empty when there are none
+  Options model;                // the options with the evaluation's root fixed: the model's trees
+};
+PointLayout gather_layout(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz,
+                          Communicator &comm);
+// choose_tree_from_points on the stand-in points (layout.xyz not empty; layout gathered with these options)
+TreeChoice choose_tree_from_layout(const KernelSpec &kernel, const TreeRequest &request, Options &options,
+                                   const PointLayout &layout);
+
 
 // ---- tuning the tree by timing (tree_tuning.cpp)
 // The cost model's residuals (6-17 % RMS per point set, more for the grid on heaped points at
@@ -346,9 +374,10 @@ TreeChoice choose_tree_from_points(const KernelSpec &kernel, const TreeRequest &
 // Two ladders of trees: octrees of leaf sizes 2^(j/2) times the one in use (up to 4 distinct
 // trees on either side: same depth and modelled cost is the same tree) and, when the grid is
 // chosen with the tree (request.grid < 0, periodic), the single-level grids choose_tree offers,
-// by cells per side. Modelled on these points (xyz: one process holds all of them) or, when
-// xyz is null (the distributed evaluation: each rank holds its own points), on n uniformly
-// spread points (octrees of depths 0 .. log8 n): the same on every rank. The search starts at
+// by cells per side. Modelled on these points (xyz: one process holds all of them, or the
+// stand-in of all ranks' points, gather_layout, the same on every rank) or, when xyz is null
+// (several ranks beyond kLayoutMaxPoints points), on n uniformly spread points (octrees of
+// depths 0 .. log8 n): the same on every rank. The search starts at
 // the tree in use (options: its leaf size and grid) and walks its ladder towards the faster
 // neighbour until both neighbours of the fastest are slower, and of every tree within kTuneFlat
 // of the fastest (flat stretches and bumps of a few per cent, where noise would stop the walk);
@@ -397,8 +426,10 @@ class TreeTuner {
     bool rejected = false;    // its accuracy fell short (reject)
   };
   TreeTuner() = default;
+  // model: options to model the trees with (the layout's, PointLayout::model, whose root is
+  // fixed), when they differ from the evaluator's (null: options)
   TreeTuner(const KernelSpec &kernel, const TreeRequest &request, const Options &options, std::size_t n,
-            const double *xyz);
+            const double *xyz, const Options *model = nullptr);
   bool tuning() const { return !done_; }
   void select(std::unique_ptr<Evaluator> &ev);
   void record(double seconds);

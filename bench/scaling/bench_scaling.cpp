@@ -12,7 +12,8 @@
 // periodic_clusters: the Plummer sphere and the two clusters scaled into the periodic cell
 // [-1,1]^3, charges shifted to a zero sum (as bench_tree_sweep --periodic). Prints one JSON line
 // (rank 0): wall time per evaluation (max over ranks), CPU seconds per evaluation (sum over
-// ranks), phases (max over ranks), bytes sent per rank and ghost points per rank (min/avg/max).
+// ranks), phases (max over ranks), bytes sent per rank and ghost points per rank (min/avg/max),
+// and the seconds of the tree choice (choice, tuned: the slowest rank's).
 // "dipoles": every point also carries a random dipole moment (evaluate_dipoles_distributed,
 // with second derivatives at the targets). "tuned": from the choice, the tree is tuned by timing
 // as kspace_style kifmm tunes it on several ranks (kifmm::TreeTuner on the ladders of the stand-in
@@ -147,13 +148,17 @@ int main(int argc, char **argv)
   kifmm::KernelSpec spec;
   kifmm::MpiCommunicator comm(MPI_COMM_WORLD);
   const kifmm::TreeRequest request{N, 0, o.periodic ? -1 : 0, true};
+  double t_choice = 0;    // seconds of the choice (the slowest rank)
   if (choice) {    // as kspace_style kifmm on several ranks: the choice on the stand-in of all ranks' points
+    const double t0 = MPI_Wtime();
     const kifmm::TreePlan plan = kifmm::plan_tree(o, request);
     o = plan.options;
     if (plan.from_points) {
       const kifmm::PointLayout layout = kifmm::gather_layout(spec, o, mine.size(), mine.xyz.data(), comm);
       if (!layout.xyz.empty()) kifmm::choose_tree_from_layout(spec, request, o, layout);
     }
+    t_choice = MPI_Wtime() - t0;
+    MPI_Allreduce(MPI_IN_PLACE, &t_choice, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
   } else if (how.rfind("leaf=", 0) == 0) {
     o.leaf_size = std::atoi(how.c_str() + 5);
     o.periodic_grid = 0;
@@ -223,8 +228,9 @@ int main(int argc, char **argv)
     fclose(f);
   }
   if (me == 0) {
-    printf("{\"grid\": %d, \"leaf\": %d, \"strengths\": \"%s\", \"tuning_evaluations\": %d, \"warmups\": %d, ",
-           o.periodic_grid, o.leaf_size, dipoles ? "dipoles" : "charges", tuning_evaluations, warmups);
+    printf("{\"grid\": %d, \"leaf\": %d, \"strengths\": \"%s\", \"tuning_evaluations\": %d, \"warmups\": %d, "
+           "\"choice_s\": %.4g, ",
+           o.periodic_grid, o.leaf_size, dipoles ? "dipoles" : "charges", tuning_evaluations, warmups, t_choice);
     printf("\"N\": %zu, \"dist\": \"%s\", \"order\": %d, \"ranks\": %d, \"threads\": %d, \"top_level\": %d, "
            "\"wall\": %.6g, \"cpu_sum\": %.6g, \"bytes_min\": %.0f, \"bytes_avg\": %.0f, \"bytes_max\": %.0f, "
            "\"ghost_bytes_max\": %.0f, \"let_bytes_max\": %.0f, \"let_cells_avg\": %.1f, "

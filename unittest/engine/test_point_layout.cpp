@@ -2,7 +2,8 @@
 // The stand-in of all ranks' points for the tree choice (kifmm::gather_layout): its octrees of
 // leaf size kLayoutCell and more have the real points' cells and counts (open and periodic,
 // clustered), its grids nearly the real occupancies, the choice made on it is the choice made
-// on the points, and a layout beyond kLayoutMaxPoints points is not built. Here on one process
+// on the points, the tuner walks the same trees on it, and a layout beyond kLayoutMaxPoints
+// points is not built. Here on one process
 // (the serial communicator, and one that stands for ranks holding copies of the same points);
 // over MPI ranks: test_distributed.cpp (Distributed.PointLayout*).
 #include "communicator.h"
@@ -162,4 +163,44 @@ TEST(PointLayout, CountsAddUpOverRanksUpToItsSize)
   const kifmm::PointLayout none = kifmm::gather_layout(KernelSpec{}, o, p.size(), p.xyz.data(), too_many);
   EXPECT_EQ(none.n, many * p.size());
   EXPECT_TRUE(none.xyz.empty());
+}
+
+// The tuner of several ranks models its ladders on the stand-in (the layout's options: root
+// fixed) and builds its evaluators from the evaluator's options (open: the root follows the
+// points): on the same times it walks the same trees as on the points themselves (open sets,
+// whose ladders are octrees only; the grids' modelled costs differ slightly).
+TEST(PointLayout, TunerWalksTheTreesOfThePoints)
+{
+  kifmm::SerialCommunicator serial;
+  const auto time = [](const kifmm::Options &o) {
+    return o.periodic_grid > 0 ? 1.0 + 0.02 * o.periodic_grid : 1.0 + std::fabs(std::log(o.leaf_size / 300.0));
+  };
+  for (const LayoutCase &t : layout_cases()) {
+    const std::size_t n = t.points.size();
+    const kifmm::PointLayout layout = kifmm::gather_layout(KernelSpec{}, t.options, n, t.points.xyz.data(), serial);
+    const kifmm::TreeRequest request{n, 0, t.options.periodic ? -1 : 0, true};
+    kifmm::Options start = t.options;
+    kifmm::choose_tree_from_points(KernelSpec{}, request, start, n, t.points.xyz.data());
+    kifmm::TreeTuner on_points(KernelSpec{}, request, start, n, t.points.xyz.data());
+    kifmm::TreeTuner on_layout(KernelSpec{}, request, start, n, layout.xyz.data(), &layout.model);
+    for (kifmm::TreeTuner *tuner : {&on_points, &on_layout}) {
+      std::unique_ptr<kifmm::Evaluator> ev = kifmm::make_evaluator(KernelSpec{}, start);
+      for (int k = 0; tuner->tuning() && k < 1000; ++k) {
+        tuner->select(ev);
+        EXPECT_EQ(ev->options().fixed_root, start.fixed_root) << t.name;
+        EXPECT_EQ(ev->options().root_half_width, start.root_half_width) << t.name;
+        tuner->record(time(ev->options()));
+      }
+      EXPECT_FALSE(tuner->tuning());
+      tuner->finish(ev);
+    }
+    ASSERT_GE(on_layout.timed().size(), 2u) << t.name;
+    if (t.options.periodic) continue;
+    ASSERT_EQ(on_points.timed().size(), on_layout.timed().size()) << t.name;
+    for (std::size_t i = 0; i < on_points.timed().size(); ++i) {
+      EXPECT_EQ(on_points.timed()[i].tree.leaf_size, on_layout.timed()[i].tree.leaf_size) << t.name << ", tree " << i;
+      EXPECT_EQ(on_points.timed()[i].tree.depth, on_layout.timed()[i].tree.depth) << t.name << ", tree " << i;
+      EXPECT_EQ(on_points.timed()[i].tree.cost, on_layout.timed()[i].tree.cost) << t.name << ", tree " << i;
+    }
+  }
 }

@@ -32,7 +32,8 @@ TreePlan plan_tree(const Options &options, const TreeRequest &request, const Opt
     if (request.grid <= 0) {
       plan.uniform = choose_slab_grid(opt.order, request.n, opt.root_shape);
       opt.periodic_grid = plan.uniform.grid;
-      // one rank: chosen again on the actual occupancies (kept when the same as before)
+      // chosen again on the actual occupancies (several ranks: of their stand-in; the grid in
+      // use kept until then when the same as before)
       plan.from_points = request.grid < 0 && from_points_possible(request);
       if (plan.from_points && current && current->order == opt.order && current->periodic == opt.periodic &&
           current->periodic_dims == 2 && current->periodic_grid > 0)

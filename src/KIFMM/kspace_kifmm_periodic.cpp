@@ -327,17 +327,17 @@ kifmm::Evaluator &KSpaceKIFMM::virial_evaluator()
     virial_engine->set_root_box(c, hw);
     if (periodic_fits(virial_engine->options())) return *virial_engine;
   }
+  // the atoms the grids are modelled on: this rank's, or the stand-in of all ranks' atoms
+  kifmm::PointLayout layout;
+  if (distributed()) layout = kifmm::gather_layout(engine->kernel(), o, strength.size(), xyz.data(), *kcomm);
+  const kifmm::Options &model = distributed() ? layout.model : o;
+  const std::size_t nmodel = distributed() ? (layout.xyz.empty() ? 0 : layout.n) : strength.size();
+  const double *xmodel = distributed() ? layout.xyz.data() : xyz.data();
   int best = 0;
   double least = 0;
-  if (distributed()) {
-    const kifmm::PointLayout layout = kifmm::gather_layout(engine->kernel(), o, strength.size(), xyz.data(), *kcomm);
-    if (!layout.xyz.empty())
-      for (const kifmm::TreeChoice &g : kifmm::model_grids(engine->kernel(), layout.model, layout.n, layout.xyz.data(), false))
-        if (best == 0 || g.cost < least) best = g.grid, least = g.cost;
-  } else if (!strength.empty()) {
-    for (const kifmm::TreeChoice &g : kifmm::model_grids(engine->kernel(), o, strength.size(), xyz.data(), false))
+  if (nmodel > 0)
+    for (const kifmm::TreeChoice &g : kifmm::model_grids(engine->kernel(), model, nmodel, xmodel, false))
       if (best == 0 || g.cost < least) best = g.grid, least = g.cost;
-  }
   const double want = std::cbrt(std::max(27.0, (double) tree_request.n / std::max(1, o.leaf_size)));
   double dist = 1e300;
   const bool from_atoms = best > 0;

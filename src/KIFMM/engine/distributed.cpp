@@ -106,26 +106,32 @@ template <class F> void below(const TopTree &top, int c, F &&visit)
 
 }    // namespace
 
+void global_bounds(Communicator &comm, std::size_t n, const double *xyz, double lo[3], double hi[3])
+{
+  double b[6];    // the minima of x, y, z, -x, -y, -z
+  for (int d = 0; d < 6; ++d) b[d] = std::numeric_limits<double>::max();
+  for (std::size_t i = 0; i < n; ++i)
+    for (int d = 0; d < 3; ++d) {
+      b[d] = std::min(b[d], xyz[3 * i + d]);
+      b[3 + d] = std::min(b[3 + d], -xyz[3 * i + d]);
+    }
+  comm.allreduce_min(b, 6);
+  for (int d = 0; d < 3; ++d) lo[d] = b[d], hi[d] = -b[3 + d];
+}
+
 namespace {
 
 // Global root and counts (reductions); false when there are no points or no sources.
 bool global_root(Communicator &comm, const DistributedConfig &cfg, const LocalPoints &pts, DistributedData &out)
 {
   const std::size_t n = pts.n;
-  const double *xyz = pts.xyz;
   // root: bounding cube of all points (every point is a target), as bounding_cube()
-  double b[6];
-  for (int d = 0; d < 3; ++d) b[d] = b[3 + d] = std::numeric_limits<double>::max();
-  for (std::size_t i = 0; i < n; ++i)
-    for (int d = 0; d < 3; ++d) {
-      b[d] = std::min(b[d], xyz[3 * i + d]);
-      b[3 + d] = std::min(b[3 + d], -xyz[3 * i + d]);
-    }
+  double lo[3], hi[3];
   uint64_t cnt[2] = {n, 0};
   for (std::size_t i = 0; i < n; ++i) cnt[1] += pts.source(i);
   {
     Timer t(out.t_comm);
-    comm.allreduce_min(b, 6);
+    global_bounds(comm, n, pts.xyz, lo, hi);
     comm.allreduce_sum(cnt, 2);
   }
   out.global_points = cnt[0];
@@ -133,7 +139,6 @@ bool global_root(Communicator &comm, const DistributedConfig &cfg, const LocalPo
   if (cnt[0] == 0 || cnt[1] == 0) return false;
   if (cfg.fixed_root) out.root = *cfg.fixed_root;
   else {
-    const double lo[3] = {b[0], b[1], b[2]}, hi[3] = {-b[3], -b[4], -b[5]};
     out.root = bounding_cube_of(lo, hi);
     if (cfg.pow2_root) out.root.half_width = std::exp2(std::ceil(std::log2(out.root.half_width)));
   }

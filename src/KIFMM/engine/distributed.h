@@ -50,6 +50,10 @@ struct DistributedData {
 constexpr double kGhostWork = 4096.0;
 int choose_top_level(uint64_t npoints, int nranks, int nsurf, int max_depth, int leaf_size);
 
+// Coordinate bounds of the points of all ranks (one reduction): lo, hi over every rank's xyz
+// (a rank without points contributes nothing; no points anywhere: lo = +max, hi = -max).
+void global_bounds(Communicator &comm, std::size_t n, const double *xyz, double lo[3], double hi[3]);
+
 // Parameters of distributed_setup (from the evaluator's options).
 struct DistributedConfig {
   // 0: adaptive top tree with L = choose_top_level (refined where a cell holds more than

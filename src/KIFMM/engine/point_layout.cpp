@@ -3,6 +3,7 @@
 // an adaptive histogram of the points over the evaluation's root, refined level by level on
 // global counts (one reduction per level), and stand-in points spread over its cells.
 #include "communicator.h"
+#include "distributed.h"
 #include "kifmm.h"
 #include "morton.h"
 #include "octree.h"
@@ -10,7 +11,6 @@
 
 #include <algorithm>
 #include <cstdint>
-#include <limits>
 
 namespace kifmm {
 
@@ -39,15 +39,8 @@ RootBox layout_root(const KernelSpec &kernel, const Options &options, std::size_
     root.half_width = options.root_half_width;
     return root;
   }
-  double b[6];
-  for (int d = 0; d < 6; ++d) b[d] = std::numeric_limits<double>::max();
-  for (std::size_t i = 0; i < n; ++i)
-    for (int d = 0; d < 3; ++d) {
-      b[d] = std::min(b[d], xyz[3 * i + d]);
-      b[3 + d] = std::min(b[3 + d], -xyz[3 * i + d]);
-    }
-  comm.allreduce_min(b, 6);
-  const double lo[3] = {b[0], b[1], b[2]}, hi[3] = {-b[3], -b[4], -b[5]};
+  double lo[3], hi[3];
+  global_bounds(comm, n, xyz, lo, hi);
   root = bounding_cube_of(lo, hi);
   if (kernel.type == KernelType::Yukawa) root.half_width = std::exp2(std::ceil(std::log2(root.half_width)));
   return root;

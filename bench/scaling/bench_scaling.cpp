@@ -181,9 +181,7 @@ int main(int argc, char **argv)
   int tuning_evaluations = 0;
   if (tuned) {
     const kifmm::PointLayout layout = kifmm::gather_layout(spec, o, mine.size(), mine.xyz.data(), comm);
-    kifmm::TreeTuner tuner = layout.xyz.empty()
-        ? kifmm::TreeTuner(spec, request, o, N, nullptr)
-        : kifmm::TreeTuner(spec, request, o, layout.n, layout.xyz.data(), &layout.model);
+    kifmm::TreeTuner tuner(spec, request, o, layout);
     while (tuner.tuning()) {
       tuner.select(ev);
       MPI_Barrier(MPI_COMM_WORLD);

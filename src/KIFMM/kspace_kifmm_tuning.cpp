@@ -32,9 +32,7 @@ void KSpaceKIFMM::select_tuned_tree()
     if (distributed()) {
       const kifmm::PointLayout layout =
           kifmm::gather_layout(engine->kernel(), engine_options, strength.size(), xyz.data(), *kcomm);
-      tuner = layout.xyz.empty()
-          ? kifmm::TreeTuner(engine->kernel(), tree_request, engine_options, tree_request.n, nullptr)
-          : kifmm::TreeTuner(engine->kernel(), tree_request, engine_options, layout.n, layout.xyz.data(), &layout.model);
+      tuner = kifmm::TreeTuner(engine->kernel(), tree_request, engine_options, layout);
     } else {
       tuner = kifmm::TreeTuner(engine->kernel(), tree_request, engine_options, strength.size(), xyz.data());
     }

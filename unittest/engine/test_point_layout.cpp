@@ -168,7 +168,8 @@ TEST(PointLayout, CountsAddUpOverRanksUpToItsSize)
 // The tuner of several ranks models its ladders on the stand-in (the layout's options: root
 // fixed) and builds its evaluators from the evaluator's options (open: the root follows the
 // points): on the same times it walks the same trees as on the points themselves (open sets,
-// whose ladders are octrees only; the grids' modelled costs differ slightly).
+// whose ladders are octrees only; the grids' modelled costs differ slightly). A layout without
+// points (beyond kLayoutMaxPoints) gives the uniform model's ladders.
 TEST(PointLayout, TunerWalksTheTreesOfThePoints)
 {
   kifmm::SerialCommunicator serial;
@@ -182,19 +183,33 @@ TEST(PointLayout, TunerWalksTheTreesOfThePoints)
     kifmm::Options start = t.options;
     kifmm::choose_tree_from_points(KernelSpec{}, request, start, n, t.points.xyz.data());
     kifmm::TreeTuner on_points(KernelSpec{}, request, start, n, t.points.xyz.data());
-    kifmm::TreeTuner on_layout(KernelSpec{}, request, start, n, layout.xyz.data(), &layout.model);
-    for (kifmm::TreeTuner *tuner : {&on_points, &on_layout}) {
-      std::unique_ptr<kifmm::Evaluator> ev = kifmm::make_evaluator(KernelSpec{}, start);
+    kifmm::TreeTuner on_layout(KernelSpec{}, request, start, layout);
+    // a layout without points (beyond its size): the uniform model's ladders
+    kifmm::PointLayout beyond = layout;
+    beyond.xyz.clear();
+    const kifmm::Options uniform_start = kifmm::plan_tree(t.options, request).options;
+    kifmm::TreeTuner on_beyond(KernelSpec{}, request, uniform_start, beyond);
+    kifmm::TreeTuner uniform(KernelSpec{}, request, uniform_start, n, nullptr);
+    for (kifmm::TreeTuner *tuner : {&on_points, &on_layout, &on_beyond, &uniform}) {
+      const kifmm::Options &from = tuner == &on_beyond || tuner == &uniform ? uniform_start : start;
+      std::unique_ptr<kifmm::Evaluator> ev = kifmm::make_evaluator(KernelSpec{}, from);
       for (int k = 0; tuner->tuning() && k < 1000; ++k) {
         tuner->select(ev);
-        EXPECT_EQ(ev->options().fixed_root, start.fixed_root) << t.name;
-        EXPECT_EQ(ev->options().root_half_width, start.root_half_width) << t.name;
+        EXPECT_EQ(ev->options().fixed_root, from.fixed_root) << t.name;
+        EXPECT_EQ(ev->options().root_half_width, from.root_half_width) << t.name;
         tuner->record(time(ev->options()));
       }
       EXPECT_FALSE(tuner->tuning());
       tuner->finish(ev);
     }
     ASSERT_GE(on_layout.timed().size(), 2u) << t.name;
+    ASSERT_GE(uniform.timed().size(), 2u) << t.name;
+    ASSERT_EQ(on_beyond.timed().size(), uniform.timed().size()) << t.name;
+    for (std::size_t i = 0; i < uniform.timed().size(); ++i) {
+      EXPECT_EQ(on_beyond.timed()[i].tree.leaf_size, uniform.timed()[i].tree.leaf_size) << t.name << ", tree " << i;
+      EXPECT_EQ(on_beyond.timed()[i].tree.grid, uniform.timed()[i].tree.grid) << t.name << ", tree " << i;
+      EXPECT_EQ(on_beyond.timed()[i].tree.cost, uniform.timed()[i].tree.cost) << t.name << ", tree " << i;
+    }
     if (t.options.periodic) continue;
     ASSERT_EQ(on_points.timed().size(), on_layout.timed().size()) << t.name;
     for (std::size_t i = 0; i < on_points.timed().size(); ++i) {

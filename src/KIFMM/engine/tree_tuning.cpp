@@ -98,6 +98,13 @@ TreeTuner::TreeTuner(const KernelSpec &kernel, const TreeRequest &request, const
   in_use_ = 0;
 }
 
+TreeTuner::TreeTuner(const KernelSpec &kernel, const TreeRequest &request, const Options &options,
+                     const PointLayout &layout) :
+    TreeTuner(kernel, request, options, layout.n, layout.xyz.empty() ? nullptr : layout.xyz.data(),
+              layout.xyz.empty() ? nullptr : &layout.model)
+{
+}
+
 void TreeTuner::start(int ladder, std::size_t rung)
 {
   ladder_ = ladder;

@@ -430,6 +430,9 @@ class TreeTuner {
   // fixed), when they differ from the evaluator's (null: options)
   TreeTuner(const KernelSpec &kernel, const TreeRequest &request, const Options &options, std::size_t n,
             const double *xyz, const Options *model = nullptr);
+  // on several ranks: the trees modelled on the stand-in of all ranks' points (layout, gathered
+  // with these options), or on layout.n uniformly spread points when it has none
+  TreeTuner(const KernelSpec &kernel, const TreeRequest &request, const Options &options, const PointLayout &layout);
   bool tuning() const { return !done_; }
   void select(std::unique_ptr<Evaluator> &ev);
   void record(double seconds);

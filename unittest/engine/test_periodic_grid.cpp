@@ -235,6 +235,38 @@ TEST(PeriodicGrid, CostModelChoice)
   EXPECT_EQ(kifmm::max_grid_cells(20), 0);
 }
 
+// On several ranks every rank does the grid's whole convolution over the cells
+// (evaluate_distributed), while the rest of the work is shared: the model counts the cell term
+// once per rank (Options::model_ranks), so more ranks choose grids of no more cells, and fewer
+// where the convolution weighs.
+TEST(PeriodicGrid, CostModelCountsTheConvolutionOnEveryRank)
+{
+  const Points p = neutral(uniform_cube(10000, 39));
+  int fewer = 0;
+  for (int order : {5, 7, 9, 11, 13}) {
+    kifmm::Options o = grid_opts(order, 0);
+    const std::vector<kifmm::TreeChoice> one = kifmm::model_grids(KernelSpec{}, o, p.size(), p.xyz.data(), true);
+    ASSERT_FALSE(one.empty());
+    const kifmm::GridCostConstants g = kifmm::grid_cost_constants(order);
+    int cells = 1 << 30;
+    for (int ranks : {1, 2, 4, 8}) {
+      o.model_ranks = ranks;
+      const std::vector<kifmm::TreeChoice> grids = kifmm::model_grids(KernelSpec{}, o, p.size(), p.xyz.data(), true);
+      ASSERT_EQ(grids.size(), one.size());
+      for (std::size_t i = 0; i < grids.size(); ++i) {
+        const double conv = g.cell * kifmm::grid_convolution_cells(kifmm::uniform_grid_counts(p.size(), grids[i].grid).cells);
+        EXPECT_NEAR(grids[i].cost, one[i].cost + (ranks - 1) * conv, 1e-12 * one[i].cost) << order << " " << ranks;
+      }
+      const kifmm::TreeChoice c = kifmm::choose_tree(KernelSpec{}, o, p.size(), p.xyz.data());
+      if (c.grid == 0) break;    // the octree: no grid on more ranks either
+      EXPECT_LE(c.grid, cells) << "order " << order << ", " << ranks << " ranks";
+      if (c.grid < cells && ranks > 1) ++fewer;
+      cells = c.grid;
+    }
+  }
+  EXPECT_GT(fewer, 0);
+}
+
 TEST(PeriodicGrid, BadOptionsThrow)
 {
   Points p = neutral(uniform_cube(100, 40));

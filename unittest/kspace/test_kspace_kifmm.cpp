@@ -718,10 +718,11 @@ TEST_F(KSpaceKifmm, MpiDistributedTreeTuningKeepsTheAccuracy)
 }
 
 // On several ranks the tree is chosen on the stand-in of all ranks' atoms (kifmm::gather_layout),
-// the same on every rank: the choice of one rank holding all atoms. Clustered atoms in a
-// periodic box, where the model of uniformly spread atoms (the plan before the atoms are seen)
-// takes a grid and the atoms' own trees take an octree.
-TEST_F(KSpaceKifmm, MpiDistributedTreeChoiceIsTheOneRankChoice)
+// the same on every rank: the choice on all atoms held together, modelled for this many ranks
+// (Options::model_ranks). Clustered atoms in a periodic box, where the model of uniformly
+// spread atoms (the plan before the atoms are seen) takes a grid and the atoms' own trees take
+// an octree.
+TEST_F(KSpaceKifmm, MpiDistributedTreeChoiceIsTheChoiceOnAllAtoms)
 {
   load(clusters_and_uniform(4000, 15, 200, 16));
   commands("change_box all boundary p p p\npair_style zero 0.01\npair_coeff * *\n"
@@ -739,13 +740,14 @@ TEST_F(KSpaceKifmm, MpiDistributedTreeChoiceIsTheOneRankChoice)
   ASSERT_DOUBLE_EQ(hi[0] - lo[0], hi[2] - lo[2]);    // a cube
   for (int d = 0; d < 3; ++d) o.root_center[d] = 0.5 * (lo[d] + hi[d]);
   o.root_half_width = 0.5 * (hi[0] - lo[0]);
-  kifmm::Options one_rank = o;
-  kifmm::choose_tree_from_points(kifmm::KernelSpec{}, kifmm::TreeRequest{n, 0, -1, false}, one_rank, n, xyz.data());
+  kifmm::Options on_all_atoms = o;
+  MPI_Comm_size(MPI_COMM_WORLD, &on_all_atoms.model_ranks);
+  kifmm::choose_tree_from_points(kifmm::KernelSpec{}, kifmm::TreeRequest{n, 0, -1, false}, on_all_atoms, n, xyz.data());
   const kifmm::TreeChoice uniform = kifmm::choose_tree(5, n, true, true);
   EXPECT_GT(uniform.grid, 0);
-  EXPECT_EQ(one_rank.periodic_grid, 0);
-  EXPECT_EQ(kspace()->engine_grid(), one_rank.periodic_grid);
-  EXPECT_EQ(kspace()->engine_leaf_size(), one_rank.leaf_size);
+  EXPECT_EQ(on_all_atoms.periodic_grid, 0);
+  EXPECT_EQ(kspace()->engine_grid(), on_all_atoms.periodic_grid);
+  EXPECT_EQ(kspace()->engine_leaf_size(), on_all_atoms.leaf_size);
   int me = 0;
   MPI_Comm_rank(MPI_COMM_WORLD, &me);
   if (me == 0)    // the log of rank 0

@@ -286,24 +286,36 @@ template <class K> void FmmEvaluator<K>::grid_operators(const GridGeometry &g)
   stats_.operator_bytes = ops_[0]->bytes() + grid_kernel_->bytes();
 }
 
-// P2M of the cells' own sources, batched
+// The cells with range [begin[b], end[b]) not empty, in index order: the cells whose operators
+// are applied (own sources: P2M; own targets: L2P). On several ranks a rank holds the points of
+// a part of the cells, and heaped points leave most cells empty: the batched operators go over
+// these cells only (on one process with every cell occupied, all cells in the same batches).
+inline std::vector<int> grid_busy_cells(const std::vector<int> &begin, const int *end, int kc)
+{
+  std::vector<int> cells;
+  for (int b = 0; b < kc; ++b)
+    if (end[b] > begin[b]) cells.push_back(b);
+  return cells;
+}
+
+// P2M of the cells' own sources, batched over the cells holding some
 template <class K> void FmmEvaluator<K>::grid_p2m(const GridGeometry &g)
 {
   const std::vector<int> &sb = grid_src_begin_, &own_end = grid_own_end_;
   const OperatorSet &op = *ops_[0];
   const double s = scale_[0];
-  const int kc = g.kc, nchunks = (kc + kGridBatch - 1) / kGridBatch;
+  const std::vector<int> cells = grid_busy_cells(sb, own_end.data(), g.kc);
+  const int nb = (int) cells.size(), nchunks = (nb + kGridBatch - 1) / kGridBatch;
 #pragma omp parallel
   {
     SurfacePoints surf;
     std::vector<double> chk, eq;
 #pragma omp for schedule(dynamic, 1)
     for (int ch = 0; ch < nchunks; ++ch) {
-      const int b0 = ch * kGridBatch, m = std::min(kc, b0 + kGridBatch) - b0;
+      const int j0 = ch * kGridBatch, m = std::min(nb, j0 + kGridBatch) - j0;
       chk.assign((std::size_t) nsurf_ * m, 0.0);
       for (int j = 0; j < m; ++j) {
-        const int b = b0 + j;
-        if (own_end[b] == sb[b]) continue;
+        const int b = cells[j0 + j];
         double ctr[3];
         grid_center(g, b, ctr);
         box_surface(outer_, ctr, g.h, surf);
@@ -312,7 +324,8 @@ template <class K> void FmmEvaluator<K>::grid_p2m(const GridGeometry &g)
       }
       eq.resize(chk.size());
       apply_pinv_batch(op.uc2e_a, op.uc2e_b, nsurf_, op.rank, chk.data(), m, eq.data(), 1.0 / s);
-      std::copy(eq.begin(), eq.end(), up(b0));
+      for (int j = 0; j < m; ++j)
+        std::copy(&eq[(std::size_t) j * nsurf_], &eq[(std::size_t) (j + 1) * nsurf_], up(cells[j0 + j]));
     }
   }
 }
@@ -361,25 +374,34 @@ void FmmEvaluator<K>::grid_m2l(const GridGeometry &g, const std::vector<double> 
   }
 }
 
-// check -> downward equivalent (batched), L2P
+// check -> downward equivalent (batched over the cells holding own targets), L2P
 template <class K> void FmmEvaluator<K>::grid_l2p(const GridGeometry &g, bool want_pot)
 {
   const std::vector<int> &tb = grid_trg_begin_;
   const OperatorSet &op = *ops_[0];
   const double s = scale_[0];
-  const int kc = g.kc, nchunks = (kc + kGridBatch - 1) / kGridBatch;
+  const std::vector<int> cells = grid_busy_cells(tb, tb.data() + 1, g.kc);
+  const int nb = (int) cells.size(), nchunks = (nb + kGridBatch - 1) / kGridBatch;
 #pragma omp parallel
   {
     SurfacePoints surf;
-    std::vector<double> eq;
+    std::vector<double> chk, eq;
 #pragma omp for schedule(dynamic, 1)
     for (int ch = 0; ch < nchunks; ++ch) {
-      const int b0 = ch * kGridBatch, m = std::min(kc, b0 + kGridBatch) - b0;
+      const int j0 = ch * kGridBatch, m = std::min(nb, j0 + kGridBatch) - j0;
+      // consecutive cells: their check values in place; else gathered
+      const bool run = cells[j0 + m - 1] - cells[j0] == m - 1;
+      const double *in = dcheck(cells[j0]);
+      if (!run) {
+        chk.resize((std::size_t) nsurf_ * m);
+        for (int j = 0; j < m; ++j) std::copy(dcheck(cells[j0 + j]), dcheck(cells[j0 + j]) + nsurf_, &chk[(std::size_t) j * nsurf_]);
+        in = chk.data();
+      }
       eq.resize((std::size_t) nsurf_ * m);
-      apply_pinv_batch(op.dc2e_a, op.dc2e_b, nsurf_, op.rank, dcheck(b0), m, eq.data(), 1.0 / s);
-      std::copy(eq.begin(), eq.end(), dequiv(b0));
-      for (int b = b0; b < b0 + m; ++b) {
-        if (tb[b + 1] == tb[b]) continue;
+      apply_pinv_batch(op.dc2e_a, op.dc2e_b, nsurf_, op.rank, in, m, eq.data(), 1.0 / s);
+      for (int j = 0; j < m; ++j) {
+        const int b = cells[j0 + j];
+        std::copy(&eq[(std::size_t) j * nsurf_], &eq[(std::size_t) (j + 1) * nsurf_], dequiv(b));
         double ctr[3];
         grid_center(g, b, ctr);
         box_surface(outer_, ctr, g.h, surf);

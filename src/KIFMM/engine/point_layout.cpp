@@ -55,6 +55,7 @@ PointLayout gather_layout(const KernelSpec &kernel, const Options &options, std:
   comm.allreduce_sum(&total, 1);
   out.n = total;
   out.model = options;
+  out.model.model_ranks = comm.size();
   if (total == 0 || total > kLayoutMaxPoints) return out;
   std::vector<double> wrapped;
   if (options.periodic) {

@@ -236,9 +236,10 @@ TEST(PeriodicGrid, CostModelChoice)
 }
 
 // On several ranks every rank does the grid's whole convolution over the cells
-// (evaluate_distributed), while the rest of the work is shared: the model counts the cell term
-// once per rank (Options::model_ranks), so more ranks choose grids of no more cells, and fewer
-// where the convolution weighs.
+// (evaluate_distributed), while the rest of the work goes with the points: the model counts the
+// cell term 1 / share times (Options::model_share: the largest share of the points on one
+// rank; P ranks in balance: P times), so more ranks choose grids of no more cells, and fewer
+// where the convolution weighs; all points on one rank is the one-rank model.
 TEST(PeriodicGrid, CostModelCountsTheConvolutionOnEveryRank)
 {
   const Points p = neutral(uniform_cube(10000, 39));
@@ -250,7 +251,7 @@ TEST(PeriodicGrid, CostModelCountsTheConvolutionOnEveryRank)
     const kifmm::GridCostConstants g = kifmm::grid_cost_constants(order);
     int cells = 1 << 30;
     for (int ranks : {1, 2, 4, 8}) {
-      o.model_ranks = ranks;
+      o.model_share = 1.0 / ranks;
       const std::vector<kifmm::TreeChoice> grids = kifmm::model_grids(KernelSpec{}, o, p.size(), p.xyz.data(), true);
       ASSERT_EQ(grids.size(), one.size());
       for (std::size_t i = 0; i < grids.size(); ++i) {

@@ -150,7 +150,7 @@ TEST(PointLayout, CountsAddUpOverRanksUpToItsSize)
   CopiesCommunicator two(2);
   const kifmm::PointLayout layout = kifmm::gather_layout(KernelSpec{}, o, p.size(), p.xyz.data(), two);
   EXPECT_EQ(layout.n, 2 * p.size());
-  EXPECT_EQ(layout.model.model_ranks, 2);    // the grid's convolution is done on both ranks
+  EXPECT_DOUBLE_EQ(layout.model.model_share, 0.5);    // each rank holds half the points
   ASSERT_EQ(layout.xyz.size(), 3 * layout.n);
   // every cell of the copies' tree holds twice the points of the single set's tree
   int d_one = -1, d_two = -2;

@@ -718,8 +718,8 @@ TEST_F(KSpaceKifmm, MpiDistributedTreeTuningKeepsTheAccuracy)
 }
 
 // On several ranks the tree is chosen on the stand-in of all ranks' atoms (kifmm::gather_layout),
-// the same on every rank: the choice on all atoms held together, modelled for this many ranks
-// (Options::model_ranks). Clustered atoms in a periodic box, where the model of uniformly
+// the same on every rank: the choice on all atoms held together, modelled with the largest
+// share of them on one rank (Options::model_share). Clustered atoms in a periodic box, where the model of uniformly
 // spread atoms (the plan before the atoms are seen) takes a grid and the atoms' own trees take
 // an octree.
 TEST_F(KSpaceKifmm, MpiDistributedTreeChoiceIsTheChoiceOnAllAtoms)
@@ -741,7 +741,9 @@ TEST_F(KSpaceKifmm, MpiDistributedTreeChoiceIsTheChoiceOnAllAtoms)
   for (int d = 0; d < 3; ++d) o.root_center[d] = 0.5 * (lo[d] + hi[d]);
   o.root_half_width = 0.5 * (hi[0] - lo[0]);
   kifmm::Options on_all_atoms = o;
-  MPI_Comm_size(MPI_COMM_WORLD, &on_all_atoms.model_ranks);
+  int most = 0;
+  MPI_Allreduce(&lmp->atom->nlocal, &most, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  on_all_atoms.model_share = (double) most / (double) n;
   kifmm::choose_tree_from_points(kifmm::KernelSpec{}, kifmm::TreeRequest{n, 0, -1, false}, on_all_atoms, n, xyz.data());
   const kifmm::TreeChoice uniform = kifmm::choose_tree(5, n, true, true);
   EXPECT_GT(uniform.grid, 0);

@@ -413,12 +413,13 @@ GridCostConstants grid_cost_constants(int order)
   return {1e-9 * r->cell, 1e-9 * r->occupied, 1e-9 * r->point, r->self};
 }
 
-double modelled_grid_cost(int order, std::size_t n, const TreeCounts &t, double pair_weight, int ranks)
+double modelled_grid_cost(int order, std::size_t n, const TreeCounts &t, double pair_weight, double share)
 {
+  const double convolutions = 1.0 / std::min(1.0, std::max(share, 1e-6));
   const CostConstants c = cost_constants(order);
   const GridCostConstants g = grid_cost_constants(order);
   return (c.point + g.point) * (double) n + pair_weight * c.pair * (t.near_pairs + (kSelfExtra + g.self) * t.self_pairs) +
-      c.entry * t.entries + std::max(1, ranks) * g.cell * grid_convolution_cells(t.cells) + g.occupied * t.occupied_cells;
+      c.entry * t.entries + convolutions * g.cell * grid_convolution_cells(t.cells) + g.occupied * t.occupied_cells;
 }
 
 int max_grid_cells(int order)
@@ -478,7 +479,7 @@ std::vector<TreeChoice> grids_of(const Options &o, std::size_t n, const double *
     if (octree_alternative && u.cells > (double) n) break;
     if (!grid_fits_cell(o.order, k, sh, open_z)) continue;
     const TreeCounts c = xyz ? grid_counts(n, xyz, o.root_center, o.root_half_width, k, sh, open_z) : u;
-    out.push_back(TreeChoice{o.leaf_size, 0, modelled_grid_cost(o.order, n, c, o.near_pair_weight, o.model_ranks), k});
+    out.push_back(TreeChoice{o.leaf_size, 0, modelled_grid_cost(o.order, n, c, o.near_pair_weight, o.model_share), k});
   }
   return out;
 }

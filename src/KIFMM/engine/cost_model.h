@@ -139,9 +139,11 @@ double grid_convolution_cells(double cells);    // cells log2(cells): the cell t
 constexpr double kGridPrimeLengthFactor = 1.25;
 double grid_length_factor(const int kd[3], bool open_z);
 double grid_modelled_cells(const int kd[3], bool open_z);
-// ranks: evaluate_distributed on this many ranks, each doing the whole convolution over the
-// cells (the cell term counted ranks times: the CPU time of all ranks with the rest shared)
-double modelled_grid_cost(int order, std::size_t n, const TreeCounts &counts, double pair_weight = 1.0, int ranks = 1);
+// share: evaluate_distributed with at most this share of the points on one rank, every rank
+// doing the whole convolution over the cells (the cell term counted 1 / share times: the
+// slowest rank's time over its share; Options::model_share)
+double modelled_grid_cost(int order, std::size_t n, const TreeCounts &counts, double pair_weight = 1.0,
+                          double share = 1.0);
 // Largest grid (cells per side) offered at this order: its kernels (periodic_grid.h) and the
 // convolution buffer are each at most 64 MB (counted without the padding of grid_row_stride, under
 // 1 % at orders >= 4); 0 above the largest order with a fitted constant.

@@ -55,7 +55,9 @@ PointLayout gather_layout(const KernelSpec &kernel, const Options &options, std:
   comm.allreduce_sum(&total, 1);
   out.n = total;
   out.model = options;
-  out.model.model_ranks = comm.size();
+  double most = -(double) n;    // the most points on one rank
+  comm.allreduce_min(&most, 1);
+  if (total > 0) out.model.model_share = std::min(1.0, -most / (double) total);
   if (total == 0 || total > kLayoutMaxPoints) return out;
   std::vector<double> wrapped;
   if (options.periodic) {

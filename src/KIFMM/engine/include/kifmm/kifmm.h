@@ -36,10 +36,12 @@ struct Options {
   // the tree choice's cost of a near-field pair relative to a charge pair (kDipolePairWeight
   // for evaluate_dipoles: their near-field loop costs more per pair, so smaller leaves pay)
   double near_pair_weight = 1.0;
-  // the tree choice's ranks (evaluate_distributed on this many ranks; gather_layout sets it):
-  // every rank does a single-level grid's whole convolution over the cells, while the rest of
-  // the work is shared, so the model counts the convolution this many times
-  int model_ranks = 1;
+  // the tree choice on several ranks (evaluate_distributed; gather_layout sets it): the largest
+  // share of the points one rank holds. Every rank does a single-level grid's whole convolution
+  // over the cells, while the rest of the work goes with the points: the slowest rank's time is
+  // the share's part of the rest plus the convolution, so the model counts the convolution
+  // 1 / share times (P ranks in balance: P times; all points on one rank: once)
+  double model_share = 1.0;
   int max_depth = 20;      // hard limit on tree depth (coincident clusters stop here)
   std::string cache_dir;   // on-disk operator cache; empty = in-memory cache only
   // Fixed root box instead of the bounding cube of the points (e.g. a periodic cell).

@@ -362,7 +362,8 @@ constexpr std::size_t kLayoutMaxPoints = 4000000;
 struct PointLayout {
   std::size_t n = 0;            // points of all ranks
   std::vector<double> xyz;      // the stand-in points (3 n), empty when there are none
-  Options model;                // the options with the evaluation's root fixed: the model's trees
+  Options model;                // the options with the evaluation's root fixed and model_share
+                                // (the most points on one rank over n): the model's trees
 };
 PointLayout gather_layout(const KernelSpec &kernel, const Options &options, std::size_t n, const double *xyz,
                           Communicator &comm);

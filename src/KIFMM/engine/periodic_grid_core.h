@@ -389,16 +389,10 @@ template <class K> void FmmEvaluator<K>::grid_l2p(const GridGeometry &g, bool wa
 #pragma omp for schedule(dynamic, 1)
     for (int ch = 0; ch < nchunks; ++ch) {
       const int j0 = ch * kGridBatch, m = std::min(nb, j0 + kGridBatch) - j0;
-      // consecutive cells: their check values in place; else gathered
-      const bool run = cells[j0 + m - 1] - cells[j0] == m - 1;
-      const double *in = dcheck(cells[j0]);
-      if (!run) {
-        chk.resize((std::size_t) nsurf_ * m);
-        for (int j = 0; j < m; ++j) std::copy(dcheck(cells[j0 + j]), dcheck(cells[j0 + j]) + nsurf_, &chk[(std::size_t) j * nsurf_]);
-        in = chk.data();
-      }
-      eq.resize((std::size_t) nsurf_ * m);
-      apply_pinv_batch(op.dc2e_a, op.dc2e_b, nsurf_, op.rank, in, m, eq.data(), 1.0 / s);
+      chk.resize((std::size_t) nsurf_ * m);
+      for (int j = 0; j < m; ++j) std::copy(dcheck(cells[j0 + j]), dcheck(cells[j0 + j]) + nsurf_, &chk[(std::size_t) j * nsurf_]);
+      eq.resize(chk.size());
+      apply_pinv_batch(op.dc2e_a, op.dc2e_b, nsurf_, op.rank, chk.data(), m, eq.data(), 1.0 / s);
       for (int j = 0; j < m; ++j) {
         const int b = cells[j0 + j];
         std::copy(&eq[(std::size_t) j * nsurf_], &eq[(std::size_t) (j + 1) * nsurf_], dequiv(b));

@@ -28,6 +28,13 @@
 // (grid_cost_fit below). `calibrate --grid-refit GRID.err` fits them again from the stderr of
 // such a run (no new measurements).
 //
+// `calibrate --grid-fft [--orders 3-14] [--reps 5]` regenerates kGridForwardFft (calibration.cpp):
+// single-thread CPU ns of the forward surface transform of one cell (M2LTransform::forward),
+// the minimum over --reps timings of passes over 4096 cells of random densities (at least 50 ms
+// each). On several ranks every
+// rank transforms every occupied cell (periodic_grid_core.h, grid_m2l): the choice counts
+// these transforms 1 / share times (modelled_grid_cost, cost_model.h).
+//
 // `calibrate --periodic-errors [--orders 3-13]` measures the periodic column of the choose_order
 // table: relative RMS force error over all points of periodic evaluations (tree of
 // choose_tree) of uniform points in the cell [-1,1]^3 (bench::uniform(n, seed), charges made
@@ -40,6 +47,8 @@
 #include "kernels.h"
 #include "periodic.h"
 #include "periodic_grid.h"
+#include "m2l_fft.h"
+#include "surface.h"
 
 #include "bench_points.h"
 
@@ -551,10 +560,55 @@ int grid_cost_refit(const char *log)
   return 0;
 }
 
+// ns per cell of the forward surface transform (what kGridForwardFft holds)
+int grid_fft_time(int order_lo, int order_hi, int reps)
+{
+  const int cells = 4096;
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::printf("    // order, ns per cell (forward surface transform, M2LTransform::forward)\n");
+  for (int order = order_lo; order <= order_hi; ++order) {
+    const M2LTransform fft(order);
+    M2LTransform::Workspace ws(fft);
+    const int ns = surface_size(order), nblk = fft.nfreq() / 16;
+    std::vector<double> equiv((std::size_t) cells * ns), hat((std::size_t) nblk * 32);
+    for (double &x : equiv) x = u(rng);
+    double best = 1e30, sink = 0;
+    int passes = 1;    // passes over the cells per timing, so that one timing takes at least 50 ms
+    for (int rep = 0; rep < reps; ++rep) {
+      double t = 0;
+      do {
+        const std::clock_t c0 = std::clock();
+        for (int pass = 0; pass < passes; ++pass)
+          for (int b = 0; b < cells; ++b) {
+            fft.forward(&equiv[(std::size_t) b * ns], hat.data(), 32, ws);
+            sink += hat[b % hat.size()];
+          }
+        t = double(std::clock() - c0) / CLOCKS_PER_SEC;
+        if (t < 0.05) passes *= 2;
+      } while (t < 0.05);
+      best = std::min(best, t / passes);
+    }
+    std::printf("    {%d, %.4g},\n", order, 1e9 * best / cells);
+    std::fprintf(stderr, "order %d: %.4g s per %d cells, %d passes per timing (checksum %g)\n", order, best, cells,
+                 passes, sink);
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
 }    // namespace
 
 int main(int argc, char **argv)
 {
+  if (argc > 1 && !std::strcmp(argv[1], "--grid-fft")) {
+    int lo = 3, hi = 14, reps = 5;
+    for (int i = 2; i + 1 < argc; i += 2) {
+      if (!std::strcmp(argv[i], "--orders")) std::sscanf(argv[i + 1], "%d-%d", &lo, &hi);
+      else if (!std::strcmp(argv[i], "--reps")) reps = std::atoi(argv[i + 1]);
+    }
+    return grid_fft_time(lo, hi, reps);
+  }
   if (argc > 2 && !std::strcmp(argv[1], "--grid-refit")) return grid_cost_refit(argv[2]);
   if (argc > 1 && !std::strcmp(argv[1], "--grid-cost")) {
     int lo = 3, hi = 14, reps = 3;

@@ -235,9 +235,9 @@ TEST(PeriodicGrid, CostModelChoice)
   EXPECT_EQ(kifmm::max_grid_cells(20), 0);
 }
 
-// On several ranks every rank does the grid's whole convolution over the cells
-// (evaluate_distributed), while the rest of the work goes with the points: the model counts the
-// cell term 1 / share times (Options::model_share: the largest share of the points on one
+// On several ranks every rank does the grid's whole convolution over the cells and the forward
+// surface transforms of all occupied cells (evaluate_distributed), while the rest of the work
+// goes with the points: the model counts the cell term and the transforms 1 / share times (Options::model_share: the largest share of the points on one
 // rank; P ranks in balance: P times), so more ranks choose grids of no more cells, and fewer
 // where the convolution weighs; all points on one rank is the one-rank model.
 TEST(PeriodicGrid, CostModelCountsTheConvolutionOnEveryRank)
@@ -249,14 +249,18 @@ TEST(PeriodicGrid, CostModelCountsTheConvolutionOnEveryRank)
     const std::vector<kifmm::TreeChoice> one = kifmm::model_grids(KernelSpec{}, o, p.size(), p.xyz.data(), true);
     ASSERT_FALSE(one.empty());
     const kifmm::GridCostConstants g = kifmm::grid_cost_constants(order);
+    EXPECT_GT(g.forward, 0.0);
+    EXPECT_LT(g.forward, g.occupied);    // a part of the occupied cell's work
     int cells = 1 << 30;
     for (int ranks : {1, 2, 4, 8}) {
       o.model_share = 1.0 / ranks;
       const std::vector<kifmm::TreeChoice> grids = kifmm::model_grids(KernelSpec{}, o, p.size(), p.xyz.data(), true);
       ASSERT_EQ(grids.size(), one.size());
       for (std::size_t i = 0; i < grids.size(); ++i) {
-        const double conv = g.cell * kifmm::grid_convolution_cells(kifmm::uniform_grid_counts(p.size(), grids[i].grid).cells);
-        EXPECT_NEAR(grids[i].cost, one[i].cost + (ranks - 1) * conv, 1e-12 * one[i].cost) << order << " " << ranks;
+        const kifmm::TreeCounts t = kifmm::grid_counts(p.size(), p.xyz.data(), o.root_center, o.root_half_width, grids[i].grid);
+        EXPECT_GT(t.occupied_cells, 0.0);
+        const double repeated = g.cell * kifmm::grid_convolution_cells(t.cells) + g.forward * t.occupied_cells;
+        EXPECT_NEAR(grids[i].cost, one[i].cost + (ranks - 1) * repeated, 1e-12 * one[i].cost) << order << " " << ranks;
       }
       const kifmm::TreeChoice c = kifmm::choose_tree(KernelSpec{}, o, p.size(), p.xyz.data());
       if (c.grid == 0) break;    // the octree: no grid on more ranks either

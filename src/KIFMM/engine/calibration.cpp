@@ -315,6 +315,17 @@ const GridRow kGridCost[] = {
     {13, 2.612e+04, 1.176e+05, 805.8, 0.375},    // [0.078; 0.043 0.098 0.083] (cells without log2: 0.101; alone: 0.202)
     {14, 3.461e+04, 1.747e+05, 918.3, 0.342},    // [0.080; 0.065 0.089 0.085] (cells without log2: 0.087; alone: 0.204)
 };
+// Seconds per cell (ns) of the forward surface transform (M2LTransform::forward), part of the
+// occupied-cell constant above; on several ranks every rank repeats it for every occupied cell.
+// Produced by `OMP_NUM_THREADS=1 ./bench/calibrate --grid-fft` (bench/results/grid_forward_fft_*).
+struct GridFftRow {
+  int order;
+  double forward;    // ns
+};
+const GridFftRow kGridForwardFft[] = {
+    {3, 241.9}, {4, 501}, {5, 972.3}, {6, 1650}, {7, 3263}, {8, 4381},
+    {9, 1.808e+04}, {10, 8785}, {11, 3.084e+04}, {12, 3.368e+04}, {13, 4.734e+04}, {14, 5.019e+04},
+};
 }    // namespace
 
 namespace {
@@ -410,7 +421,10 @@ GridCostConstants grid_cost_constants(int order)
   const GridRow *r = &kGridCost[0];
   for (const GridRow &g : kGridCost)
     if (g.order <= order) r = &g;
-  return {1e-9 * r->cell, 1e-9 * r->occupied, 1e-9 * r->point, r->self};
+  const GridFftRow *f = &kGridForwardFft[0];
+  for (const GridFftRow &row : kGridForwardFft)
+    if (row.order <= order) f = &row;
+  return {1e-9 * r->cell, 1e-9 * r->occupied, 1e-9 * r->point, r->self, 1e-9 * std::min(f->forward, r->occupied)};
 }
 
 double modelled_grid_cost(int order, std::size_t n, const TreeCounts &t, double pair_weight, double share)
@@ -419,7 +433,8 @@ double modelled_grid_cost(int order, std::size_t n, const TreeCounts &t, double 
   const CostConstants c = cost_constants(order);
   const GridCostConstants g = grid_cost_constants(order);
   return (c.point + g.point) * (double) n + pair_weight * c.pair * (t.near_pairs + (kSelfExtra + g.self) * t.self_pairs) +
-      c.entry * t.entries + convolutions * g.cell * grid_convolution_cells(t.cells) + g.occupied * t.occupied_cells;
+      c.entry * t.entries + convolutions * g.cell * grid_convolution_cells(t.cells) + g.occupied * t.occupied_cells +
+      (convolutions - 1.0) * g.forward * t.occupied_cells;
 }
 
 int max_grid_cells(int order)

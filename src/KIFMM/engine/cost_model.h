@@ -126,6 +126,7 @@ TreeCounts grid_counts(std::size_t n, const double *xyz, const double center[3],
 struct GridCostConstants {
   double cell = 0, occupied = 0, point = 0;    // seconds each
   double self = 0;    // a pair inside one cell costs (1 + self_pair_extra() + self) pairs
+  double forward = 0;    // seconds: the forward surface transform of one cell, a part of `occupied`
 };
 GridCostConstants grid_cost_constants(int order);
 double grid_convolution_cells(double cells);    // cells log2(cells): the cell term's count
@@ -140,8 +141,9 @@ constexpr double kGridPrimeLengthFactor = 1.25;
 double grid_length_factor(const int kd[3], bool open_z);
 double grid_modelled_cells(const int kd[3], bool open_z);
 // share: evaluate_distributed with at most this share of the points on one rank, every rank
-// doing the whole convolution over the cells (the cell term counted 1 / share times: the
-// slowest rank's time over its share; Options::model_share)
+// doing the whole convolution over the cells and the forward surface transforms of all
+// occupied cells (the cell term and the transforms counted 1 / share times: the slowest rank's
+// time over its share; Options::model_share)
 double modelled_grid_cost(int order, std::size_t n, const TreeCounts &counts, double pair_weight = 1.0,
                           double share = 1.0);
 // Largest grid (cells per side) offered at this order: its kernels (periodic_grid.h) and the

@@ -38,9 +38,10 @@ struct Options {
   double near_pair_weight = 1.0;
   // the tree choice on several ranks (evaluate_distributed; gather_layout sets it): the largest
   // share of the points one rank holds. Every rank does a single-level grid's whole convolution
-  // over the cells, while the rest of the work goes with the points: the slowest rank's time is
-  // the share's part of the rest plus the convolution, so the model counts the convolution
-  // 1 / share times (P ranks in balance: P times; all points on one rank: once)
+  // over the cells and the forward surface transforms of all occupied cells, while the rest of
+  // the work goes with the points: the slowest rank's time is the share's part of the rest plus
+  // the repeated part, so the model counts the repeated part 1 / share times (P ranks in
+  // balance: P times; all points on one rank: once)
   double model_share = 1.0;
   int max_depth = 20;      // hard limit on tree depth (coincident clusters stop here)
   std::string cache_dir;   // on-disk operator cache; empty = in-memory cache only

@@ -31,9 +31,8 @@
 // `calibrate --grid-fft [--orders 3-14] [--reps 5]` regenerates kGridForwardFft (calibration.cpp):
 // single-thread CPU ns of the forward surface transform of one cell (M2LTransform::forward),
 // the minimum over --reps timings of passes over 4096 cells of random densities (at least 50 ms
-// each). On several ranks every
-// rank transforms every occupied cell (periodic_grid_core.h, grid_m2l): the choice counts
-// these transforms 1 / share times (modelled_grid_cost, cost_model.h).
+// each). On several ranks every rank transforms every occupied cell (periodic_grid_core.h,
+// grid_m2l): the choice counts these transforms 1 / share times (modelled_grid_cost).
 //
 // `calibrate --periodic-errors [--orders 3-13]` measures the periodic column of the choose_order
 // table: relative RMS force error over all points of periodic evaluations (tree of
@@ -597,25 +596,29 @@ int grid_fft_time(int order_lo, int order_hi, int reps)
   return 0;
 }
 
+// --orders LO-HI, --reps R and --only-n N after the mode (argv[1]); the others keep their defaults
+void parse_options(int argc, char **argv, int &lo, int &hi, int &reps, std::size_t *only_n = nullptr)
+{
+  for (int i = 2; i + 1 < argc; i += 2) {
+    if (!std::strcmp(argv[i], "--orders")) std::sscanf(argv[i + 1], "%d-%d", &lo, &hi);
+    else if (!std::strcmp(argv[i], "--reps")) reps = std::atoi(argv[i + 1]);
+    else if (only_n && !std::strcmp(argv[i], "--only-n")) *only_n = (std::size_t) std::atof(argv[i + 1]);
+  }
+}
+
 }    // namespace
 
 int main(int argc, char **argv)
 {
   if (argc > 1 && !std::strcmp(argv[1], "--grid-fft")) {
     int lo = 3, hi = 14, reps = 5;
-    for (int i = 2; i + 1 < argc; i += 2) {
-      if (!std::strcmp(argv[i], "--orders")) std::sscanf(argv[i + 1], "%d-%d", &lo, &hi);
-      else if (!std::strcmp(argv[i], "--reps")) reps = std::atoi(argv[i + 1]);
-    }
+    parse_options(argc, argv, lo, hi, reps);
     return grid_fft_time(lo, hi, reps);
   }
   if (argc > 2 && !std::strcmp(argv[1], "--grid-refit")) return grid_cost_refit(argv[2]);
   if (argc > 1 && !std::strcmp(argv[1], "--grid-cost")) {
     int lo = 3, hi = 14, reps = 3;
-    for (int i = 2; i + 1 < argc; i += 2) {
-      if (!std::strcmp(argv[i], "--orders")) std::sscanf(argv[i + 1], "%d-%d", &lo, &hi);
-      else if (!std::strcmp(argv[i], "--reps")) reps = std::atoi(argv[i + 1]);
-    }
+    parse_options(argc, argv, lo, hi, reps);
     return grid_cost_fit(lo, hi, reps);
   }
   if (argc > 1 && !std::strcmp(argv[1], "--periodic-errors")) {
@@ -628,11 +631,7 @@ int main(int argc, char **argv)
   if (argc > 1 && !std::strcmp(argv[1], "--cost")) {
     int lo = 3, hi = 14, reps = 3;
     std::size_t only_n = 0;
-    for (int i = 2; i + 1 < argc; i += 2) {
-      if (!std::strcmp(argv[i], "--orders")) std::sscanf(argv[i + 1], "%d-%d", &lo, &hi);
-      else if (!std::strcmp(argv[i], "--reps")) reps = std::atoi(argv[i + 1]);
-      else if (!std::strcmp(argv[i], "--only-n")) only_n = (std::size_t) std::atof(argv[i + 1]);
-    }
+    parse_options(argc, argv, lo, hi, reps, &only_n);
     return cost_fit(lo, hi, reps, only_n);
   }
   const std::size_t n = 100000, ns = 2000;

@@ -237,9 +237,10 @@ TEST(PeriodicGrid, CostModelChoice)
 
 // On several ranks every rank does the grid's whole convolution over the cells and the forward
 // surface transforms of all occupied cells (evaluate_distributed), while the rest of the work
-// goes with the points: the model counts the cell term and the transforms 1 / share times (Options::model_share: the largest share of the points on one
-// rank; P ranks in balance: P times), so more ranks choose grids of no more cells, and fewer
-// where the convolution weighs; all points on one rank is the one-rank model.
+// goes with the points: the model counts the cell term and the transforms 1 / share times
+// (Options::model_share: the largest share of the points on one rank; P ranks in balance: P
+// times), so more ranks choose grids of no more cells, and fewer where the convolution weighs;
+// all points on one rank is the one-rank model.
 TEST(PeriodicGrid, CostModelCountsTheConvolutionOnEveryRank)
 {
   const Points p = neutral(uniform_cube(10000, 39));

@@ -79,6 +79,16 @@ Choice choose_order(const KernelSpec &, double rel_force_error, bool periodic)
 // ---------------------------------------------------------------- tree choice (cost_model.h)
 
 namespace {
+// The row of a per-order table (rows in increasing order) for this order: the last row of an
+// order not above it, or the first row
+template <class Row, std::size_t N> const Row &row_for_order(const Row (&table)[N], int order)
+{
+  const Row *r = &table[0];
+  for (const Row &row : table)
+    if (row.order <= order) r = &row;
+  return *r;
+}
+
 // Per-order constants of the cost model in nanoseconds: point, near-field pair, M2L translation,
 // cell, entry, spill, periodic evaluation, periodic cell (cost_model.h). Produced by
 // `OMP_NUM_THREADS=1 ./bench/calibrate --cost` (bench/calibrate.cpp; the rows in use by
@@ -173,9 +183,7 @@ int leaf_size_for_depth(std::size_t n, int depth)
 
 CostConstants cost_constants(int order)
 {
-  const CostRow *r = &kCost[0];
-  for (const CostRow &c : kCost)
-    if (c.order <= order) r = &c;
+  const CostRow *r = &row_for_order(kCost, order);
   return CostConstants{1e-9 * r->point, 1e-9 * r->pair,  1e-9 * r->translation,
                        1e-9 * r->cell,  1e-9 * r->entry, 1e-9 * r->spill,
                        1e-9 * r->periodic, 1e-9 * r->periodic_cell};
@@ -418,12 +426,8 @@ double grid_convolution_cells(double cells)
 
 GridCostConstants grid_cost_constants(int order)
 {
-  const GridRow *r = &kGridCost[0];
-  for (const GridRow &g : kGridCost)
-    if (g.order <= order) r = &g;
-  const GridFftRow *f = &kGridForwardFft[0];
-  for (const GridFftRow &row : kGridForwardFft)
-    if (row.order <= order) f = &row;
+  const GridRow *r = &row_for_order(kGridCost, order);
+  const GridFftRow *f = &row_for_order(kGridForwardFft, order);
   return {1e-9 * r->cell, 1e-9 * r->occupied, 1e-9 * r->point, r->self, 1e-9 * std::min(f->forward, r->occupied)};
 }
 
